@@ -1,0 +1,159 @@
+//! The library's one error type.
+//!
+//! Every fallible call returns [`Result<T>`]. An [`Error`] says *what* went wrong
+//! ([`ErrorKind`]), *where* (the file or source name, and a [`Location`]: a line or a
+//! byte offset) and a short human message. Its `Display` is always a single line, e.g.
+//! `bunny.off: line 12: vertex index 3490 out of range (3485 vertices)`.
+
+use std::fmt;
+use std::path::Path;
+
+/// What kind of problem an [`Error`] reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ErrorKind {
+    /// The operating system refused to read or write a file.
+    Io,
+    /// The input holds no data at all.
+    Empty,
+    /// The file format could not be recognised from the name or the content.
+    UnknownFormat,
+    /// The data ends before what the header or the syntax promises.
+    Truncated,
+    /// A token or a header line is not what the format allows.
+    Syntax,
+    /// A face refers to a vertex that does not exist.
+    IndexOutOfRange,
+    /// A coordinate is NaN or infinite.
+    NonFinite,
+    /// Declared and actual counts disagree (or a count is impossible).
+    CountMismatch,
+    /// Valid in the format, but a feature this library does not read.
+    Unsupported,
+    /// A caller-supplied parameter is outside its allowed range or unknown.
+    InvalidArgument,
+    /// The mesh was read but is not what the method needs (e.g. open or non-manifold).
+    InvalidMesh,
+}
+
+/// Where in the input an error was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Location {
+    /// 1-based line number (text formats).
+    Line(usize),
+    /// 0-based byte offset (binary formats).
+    Byte(u64),
+}
+
+/// An error with its kind, its source (file name) and its location.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Error {
+    kind: ErrorKind,
+    source: Option<String>,
+    location: Option<Location>,
+    message: String,
+}
+
+/// `Result` with the library's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// A new error with a kind and a message, without source or location.
+    pub fn new(kind: ErrorKind, message: impl Into<String>) -> Self {
+        let message: String = message.into();
+        // Keep the one-line promise even if a message was built from input text.
+        let message = message.replace(['\n', '\r'], " ");
+        Error {
+            kind,
+            source: None,
+            location: None,
+            message,
+        }
+    }
+
+    /// Shorthand for an [`ErrorKind::InvalidArgument`] error.
+    pub fn invalid_argument(message: impl Into<String>) -> Self {
+        Error::new(ErrorKind::InvalidArgument, message)
+    }
+
+    /// Attach a line number (1-based).
+    pub fn at_line(mut self, line: usize) -> Self {
+        self.location = Some(Location::Line(line));
+        self
+    }
+
+    /// Attach a byte offset (0-based).
+    pub fn at_byte(mut self, offset: u64) -> Self {
+        self.location = Some(Location::Byte(offset));
+        self
+    }
+
+    /// Attach the source name (usually the file path) unless one is already set.
+    pub fn in_source(mut self, source: impl Into<String>) -> Self {
+        if self.source.is_none() {
+            self.source = Some(source.into());
+        }
+        self
+    }
+
+    /// Attach a file path as source.
+    pub fn in_file(self, path: &Path) -> Self {
+        self.in_source(path.display().to_string())
+    }
+
+    /// What kind of problem this is.
+    pub fn kind(&self) -> ErrorKind {
+        self.kind
+    }
+
+    /// The file or source name, if known.
+    pub fn source_name(&self) -> Option<&str> {
+        self.source.as_deref()
+    }
+
+    /// The line or byte offset, if known.
+    pub fn location(&self) -> Option<Location> {
+        self.location
+    }
+
+    /// The message without source and location.
+    pub fn message(&self) -> &str {
+        &self.message
+    }
+
+    /// True for errors caused by the input or the caller's arguments (as opposed to
+    /// the environment, such as an unreadable file). Used by the CLI for exit codes.
+    pub fn is_input_error(&self) -> bool {
+        self.kind != ErrorKind::Io
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(source) = &self.source {
+            write!(f, "{source}: ")?;
+        }
+        match self.location {
+            Some(Location::Line(line)) => write!(f, "line {line}: ")?,
+            Some(Location::Byte(offset)) => write!(f, "byte {offset}: ")?,
+            None => {}
+        }
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for Error {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_is_one_line_with_source_and_location() {
+        let e = Error::new(ErrorKind::Syntax, "bad\ntoken")
+            .at_line(7)
+            .in_source("a.obj");
+        assert_eq!(e.to_string(), "a.obj: line 7: bad token");
+        let e = Error::new(ErrorKind::Truncated, "ends early").at_byte(84);
+        assert_eq!(e.to_string(), "byte 84: ends early");
+    }
+}

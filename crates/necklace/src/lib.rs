@@ -1,0 +1,26 @@
+//! # necklace
+//!
+//! Finds the *neck loops* of a closed triangle mesh: loops that lasso the narrow parts of
+//! the solid (handles) and of the space around it (tunnels), following
+//! "Fast Computation of Neck-like Features" (see `ARCHITECTURE.md` for the stage diagram).
+//!
+//! ## Tour
+//! - [`mesh`]: [`SurfaceMesh`], the plain data every stage starts from, its topology and
+//!   its validity report ([`MeshReport`]).
+//! - [`io`]: reading OBJ, OFF, PLY and STL; writing OBJ, OFF and binary PLY.
+//! - [`shapes`]: analytic test shapes (signed distance functions meshed by marching
+//!   tetrahedra) with their known necks: the ground truth of the test suite.
+//! - [`pipeline`]: the only module that composes the others.
+//!
+//! Every fallible call returns [`Result`] with the one [`Error`] type, whose message is a
+//! single line naming the file and the line or byte where the problem is.
+
+pub mod error;
+mod geom;
+pub mod io;
+pub mod mesh;
+pub mod pipeline;
+pub mod shapes;
+
+pub use error::{Error, ErrorKind, Location, Result};
+pub use mesh::{MeshReport, SurfaceMesh};

@@ -1,0 +1,70 @@
+//! The import rules of ARCHITECTURE.md: data modules import only data modules, stages
+//! import only data modules (never another stage), only `pipeline` composes stages.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+const DATA: &[&str] = &["error", "geom", "mesh"];
+const STAGES: &[&str] = &["io", "shapes", "volume", "morse", "loops", "render"];
+
+/// The top-level modules referenced as `crate::name` anywhere in `path` (file or dir).
+fn crate_imports(path: &Path) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    let mut files = vec![path.to_path_buf()];
+    while let Some(p) = files.pop() {
+        if p.is_dir() {
+            for entry in std::fs::read_dir(&p).unwrap() {
+                files.push(entry.unwrap().path());
+            }
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            let text = std::fs::read_to_string(&p).unwrap();
+            for (i, _) in text.match_indices("crate::") {
+                // Skip `necklace_crate::` style prefixes: require a non-identifier before.
+                let before = text[..i].chars().next_back();
+                if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+                    continue;
+                }
+                let name: String = text[i + 7..]
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                if !name.is_empty() {
+                    out.insert(name);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn modules_follow_the_import_rules() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(&src).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_stem().unwrap().to_str().unwrap().to_string();
+        if name == "lib" || name == "pipeline" {
+            continue;
+        }
+        let imports = crate_imports(&path);
+        let allowed: &[&str] = if let Some(pos) = DATA.iter().position(|d| *d == name) {
+            &DATA[..pos]
+        } else if STAGES.contains(&name.as_str()) {
+            DATA
+        } else {
+            panic!("module {name} is neither data nor a stage: add it to ARCHITECTURE.md and this test");
+        };
+        for import in &imports {
+            if import == &name {
+                continue;
+            }
+            assert!(
+                allowed.contains(&import.as_str()),
+                "module {name} imports crate::{import}, which ARCHITECTURE.md does not allow"
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked >= 5);
+}
