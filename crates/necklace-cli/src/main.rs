@@ -1,0 +1,146 @@
+//! `necklace`: the command-line tool. It parses flags, builds library options, calls the
+//! library and prints; every algorithm lives in the `necklace` library crate.
+//!
+//! Exit status: 0 on success, 2 for bad input (unreadable or malformed file, bad
+//! argument), 1 for any other failure. Errors are one line on stderr.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use necklace::shapes::{Shape, ShapeKind};
+use necklace::{io, MeshReport};
+
+#[derive(Parser)]
+#[command(
+    name = "necklace",
+    version,
+    about = "Neck loops (handles and tunnels) of closed triangle meshes"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print counts, the validity report and the genus per component of a mesh
+    /// (OBJ, OFF, PLY or STL).
+    Info {
+        /// The mesh file.
+        mesh: PathBuf,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Generate an analytic test shape with known necks and write it as a mesh.
+    Shape {
+        /// sphere, torus, varying-torus, dumbbell, chain, eight or pretzel.
+        #[arg(required_unless_present = "list")]
+        name: Option<String>,
+        /// A shape parameter, `name=value` (repeatable); `--list` shows them.
+        #[arg(long = "param", value_name = "K=V", value_parser = parse_param)]
+        params: Vec<(String, f64)>,
+        /// Output file (.obj, .off or .ply).
+        #[arg(short, long, required_unless_present = "list")]
+        output: Option<PathBuf>,
+        /// List the shapes, their parameters and their expected necks.
+        #[arg(long)]
+        list: bool,
+    },
+}
+
+fn parse_param(s: &str) -> std::result::Result<(String, f64), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected name=value, got '{s}'"))?;
+    let v: f64 = v
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{v}' is not a number"))?;
+    Ok((k.trim().to_string(), v))
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(text) => {
+            // A closed pipe (`necklace ... | head`) is not an error worth a message.
+            let _ = std::io::stdout().lock().write_all(text.as_bytes());
+            ExitCode::SUCCESS
+        }
+        Err(err) => {
+            eprintln!("necklace: {err:#}");
+            // Library errors are about the input or the arguments: status 2.
+            if err.downcast_ref::<necklace::Error>().is_some() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::from(1)
+            }
+        }
+    }
+}
+
+/// Run a command; the text it returns goes to stdout.
+fn run(cli: Cli) -> Result<String> {
+    match cli.command {
+        Command::Info { mesh, json } => info(mesh, json),
+        Command::Shape {
+            name,
+            params,
+            output,
+            list,
+        } => match (list, name, output) {
+            (true, _, _) => Ok(list_shapes()),
+            (false, Some(name), Some(output)) => shape(&name, &params, output),
+            _ => unreachable!("clap requires NAME and -o unless --list"),
+        },
+    }
+}
+
+fn info(path: PathBuf, json: bool) -> Result<String> {
+    let mesh = io::read_mesh(&path)?;
+    let report = MeshReport::new(&mesh);
+    if json {
+        let mut value = serde_json::to_value(&report).context("encoding the report")?;
+        value["file"] = serde_json::Value::String(path.display().to_string());
+        Ok(serde_json::to_string_pretty(&value)? + "\n")
+    } else {
+        Ok(format!("{}\n{report}\n", path.display()))
+    }
+}
+
+fn shape(name: &str, params: &[(String, f64)], output: PathBuf) -> Result<String> {
+    let shape = Shape::from_name(name, params)?;
+    let mesh = shape.mesh()?;
+    io::write_mesh(&output, &mesh)?;
+    let report = MeshReport::new(&mesh);
+    let params: Vec<String> = shape
+        .params()
+        .iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    Ok(format!(
+        "{} ({}): {} vertices, {} faces, genus {} -> {}\n",
+        shape.kind(),
+        params.join(" "),
+        report.vertices,
+        report.faces,
+        shape.genus(),
+        output.display()
+    ))
+}
+
+fn list_shapes() -> String {
+    let mut out = String::new();
+    for kind in ShapeKind::ALL {
+        let _ = writeln!(out, "{kind}: {}", kind.description());
+        for p in kind.params() {
+            let _ = writeln!(out, "    {:<8} default {:<6} {}", p.name, p.default, p.doc);
+        }
+    }
+    out
+}

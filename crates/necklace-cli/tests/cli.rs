@@ -1,0 +1,121 @@
+//! The `necklace` binary end to end: exit codes, files written, JSON fields.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn necklace(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_necklace"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("necklace-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn shape_then_info_json_reports_the_generated_genus() {
+    let dir = temp_dir("eight");
+    let path = dir.join("eight.ply");
+    let out = necklace(&[
+        "shape",
+        "eight",
+        "--param",
+        "res=40",
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(path.exists());
+
+    let out = necklace(&["info", path.to_str().unwrap(), "--json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in [
+        "vertices",
+        "faces",
+        "components",
+        "genus",
+        "euler",
+        "watertight",
+        "manifold",
+        "oriented",
+        "outward",
+        "boundary_edges",
+        "bbox_min",
+        "bbox_max",
+    ] {
+        assert!(json.get(key).is_some(), "missing key {key}");
+    }
+    assert_eq!(json["genus"], serde_json::json!([2]));
+    assert_eq!(json["euler"], serde_json::json!(-2));
+    assert_eq!(json["watertight"], serde_json::json!(true));
+    assert_eq!(json["outward"], serde_json::json!(true));
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn info_text_names_the_problems_of_an_open_mesh_and_exits_0() {
+    let dir = temp_dir("open");
+    let path = dir.join("open.obj");
+    std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let out = necklace(&["info", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("open: 3 boundary edges in 1 loops"), "{text}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn unreadable_files_exit_2_with_one_line_on_stderr() {
+    let dir = temp_dir("bad");
+    let bad = dir.join("bad.off");
+    std::fs::write(&bad, "OFF\n3 1 0\n0 0 0\n1 0 0\n").unwrap();
+    let missing = dir.join("missing.obj");
+    for path in [bad, missing] {
+        let out = necklace(&["info", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains(path.to_str().unwrap()), "{err}");
+        assert!(out.stdout.is_empty());
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn bad_shape_arguments_exit_2() {
+    let out = necklace(&["shape", "torus", "--param", "r=2", "-o", "x.obj"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("must be < R"));
+    let out = necklace(&["shape", "torus", "--param", "r", "-o", "x.obj"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = necklace(&["shape", "cube", "-o", "x.obj"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!PathBuf::from("x.obj").exists());
+}
+
+#[test]
+fn shape_list_names_every_shape() {
+    let out = necklace(&["shape", "--list"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for name in [
+        "sphere",
+        "torus",
+        "varying-torus",
+        "dumbbell",
+        "chain",
+        "eight",
+        "pretzel",
+    ] {
+        assert!(text.contains(&format!("{name}:")), "{name} missing");
+    }
+}
