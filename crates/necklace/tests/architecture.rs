@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
-const DATA: &[&str] = &["error", "geom", "mesh"];
+const DATA: &[&str] = &["error", "geom", "mesh", "tet"];
 const STAGES: &[&str] = &["io", "shapes", "volume", "morse", "loops", "render"];
 
 /// The top-level modules referenced as `crate::name` anywhere in `path` (file or dir).

@@ -25,6 +25,7 @@ mod topology;
 
 pub use report::{ComponentReport, MeshReport};
 pub use topology::Topology;
+pub(crate) use topology::{find, union};
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{cross, dot, norm, sub};

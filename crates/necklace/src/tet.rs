@@ -1,0 +1,357 @@
+//! Tetrahedral meshes: the plain data the volume stages pass along.
+//!
+//! A [`TetMesh`] holds vertex positions, tetrahedra (four `u32` vertex indices each,
+//! positively oriented: `(b − a) · ((c − a) × (d − a)) > 0`), and per vertex its
+//! [`VertexKind`]: interior, on the input surface, or on the outer bounding sphere (the
+//! outer boundary of an exterior shell). The vertex-to-tet adjacency (CSR) is built by
+//! [`TetMesh::new`] for the stages that walk vertex stars.
+//!
+//! Queries: volumes, boundary faces, Euler characteristic χ = V − E + F − T, dihedral
+//! angles, and [`TetMesh::classify_boundary`] for meshes read from files, which carry no
+//! vertex kinds.
+
+use std::collections::HashMap;
+
+use serde::Serialize;
+
+use crate::error::{Error, ErrorKind, Result};
+use crate::geom::{cross, dot, norm, sub};
+use crate::mesh::{find, union};
+
+/// Where a vertex of a tet mesh lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VertexKind {
+    /// Strictly inside the meshed region.
+    Interior,
+    /// On the input surface.
+    Surface,
+    /// On the outer boundary of an exterior shell (the bounding sphere).
+    Outer,
+}
+
+/// A tetrahedral mesh with vertex kinds and vertex-to-tet adjacency.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TetMesh {
+    /// Vertex positions.
+    pub positions: Vec<[f64; 3]>,
+    /// Tetrahedra, positively oriented.
+    pub tets: Vec<[u32; 4]>,
+    /// Kind of each vertex.
+    pub kinds: Vec<VertexKind>,
+    vertex_tet_start: Vec<u32>,
+    vertex_tets: Vec<u32>,
+}
+
+impl TetMesh {
+    /// Build a tet mesh; checks index ranges, finite coordinates and one kind per vertex,
+    /// and builds the vertex-to-tet adjacency.
+    pub fn new(
+        positions: Vec<[f64; 3]>,
+        tets: Vec<[u32; 4]>,
+        kinds: Vec<VertexKind>,
+    ) -> Result<TetMesh> {
+        let n = positions.len();
+        if kinds.len() != n {
+            return Err(Error::new(
+                ErrorKind::CountMismatch,
+                format!("{} vertex kinds for {n} vertices", kinds.len()),
+            ));
+        }
+        if let Some(i) = positions
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
+            return Err(Error::new(
+                ErrorKind::NonFinite,
+                format!("vertex {i} has a non-finite coordinate"),
+            ));
+        }
+        for (t, tet) in tets.iter().enumerate() {
+            if let Some(&v) = tet.iter().find(|&&v| v as usize >= n) {
+                return Err(Error::new(
+                    ErrorKind::IndexOutOfRange,
+                    format!("tet {t} uses vertex {v}, but there are {n} vertices"),
+                ));
+            }
+        }
+        let mut start = vec![0u32; n + 1];
+        for tet in &tets {
+            for &v in tet {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut vertex_tets = vec![0u32; 4 * tets.len()];
+        for (t, tet) in tets.iter().enumerate() {
+            for &v in tet {
+                vertex_tets[fill[v as usize] as usize] = t as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Ok(TetMesh {
+            positions,
+            tets,
+            kinds,
+            vertex_tet_start: start,
+            vertex_tets,
+        })
+    }
+
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of tetrahedra.
+    pub fn num_tets(&self) -> usize {
+        self.tets.len()
+    }
+
+    /// The tets that use vertex `v`.
+    pub fn vertex_tets(&self, v: usize) -> &[u32] {
+        let (s, e) = (self.vertex_tet_start[v], self.vertex_tet_start[v + 1]);
+        &self.vertex_tets[s as usize..e as usize]
+    }
+
+    /// Number of vertices of each kind: (interior, surface, outer).
+    pub fn kind_counts(&self) -> (usize, usize, usize) {
+        let count = |k| self.kinds.iter().filter(|&&x| x == k).count();
+        (
+            count(VertexKind::Interior),
+            count(VertexKind::Surface),
+            count(VertexKind::Outer),
+        )
+    }
+
+    /// The four corner positions of tet `t`.
+    pub fn corners(&self, t: usize) -> [[f64; 3]; 4] {
+        self.tets[t].map(|v| self.positions[v as usize])
+    }
+
+    /// Signed volume of tet `t` (positive when positively oriented).
+    pub fn tet_volume(&self, t: usize) -> f64 {
+        let [a, b, c, d] = self.corners(t);
+        dot(sub(b, a), cross(sub(c, a), sub(d, a))) / 6.0
+    }
+
+    /// Sum of the signed tet volumes.
+    pub fn volume(&self) -> f64 {
+        (0..self.num_tets()).map(|t| self.tet_volume(t)).sum()
+    }
+
+    /// Faces with exactly one tet, oriented with their normal pointing out of the mesh
+    /// (counter-clockwise seen from outside).
+    pub fn boundary_faces(&self) -> Vec<[u32; 3]> {
+        // The faces of a positively oriented tet (a, b, c, d), outward.
+        let mut faces: Vec<([u32; 3], [u32; 3])> = Vec::with_capacity(4 * self.tets.len());
+        for &[a, b, c, d] in &self.tets {
+            for f in [[b, c, d], [a, d, c], [a, b, d], [a, c, b]] {
+                let mut key = f;
+                key.sort_unstable();
+                faces.push((key, f));
+            }
+        }
+        faces.sort_unstable_by_key(|x| x.0);
+        let mut out = Vec::new();
+        let mut i = 0;
+        while i < faces.len() {
+            let mut j = i + 1;
+            while j < faces.len() && faces[j].0 == faces[i].0 {
+                j += 1;
+            }
+            if j - i == 1 {
+                out.push(faces[i].1);
+            }
+            i = j;
+        }
+        out
+    }
+
+    /// Euler characteristic V − E + F − T over the vertices used by tets.
+    pub fn euler_characteristic(&self) -> i64 {
+        let mut edges: Vec<[u32; 2]> = Vec::with_capacity(6 * self.tets.len());
+        let mut faces: Vec<[u32; 3]> = Vec::with_capacity(4 * self.tets.len());
+        let mut used = vec![false; self.num_vertices()];
+        for tet in &self.tets {
+            let mut s = *tet;
+            s.sort_unstable();
+            for &v in &s {
+                used[v as usize] = true;
+            }
+            for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+                edges.push([s[i], s[j]]);
+            }
+            for skip in 0..4 {
+                let mut f = [0u32; 3];
+                let mut k = 0;
+                for (i, &v) in s.iter().enumerate() {
+                    if i != skip {
+                        f[k] = v;
+                        k += 1;
+                    }
+                }
+                faces.push(f);
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        faces.sort_unstable();
+        faces.dedup();
+        let v = used.iter().filter(|&&u| u).count() as i64;
+        v - edges.len() as i64 + faces.len() as i64 - self.tets.len() as i64
+    }
+
+    /// Smallest and largest dihedral angle over all tets, in degrees (`None` for no tets).
+    pub fn dihedral_range_deg(&self) -> Option<(f64, f64)> {
+        let mut range: Option<(f64, f64)> = None;
+        for t in 0..self.num_tets() {
+            for angle in dihedral_angles_deg(self.corners(t)) {
+                range = Some(match range {
+                    None => (angle, angle),
+                    Some((lo, hi)) => (lo.min(angle), hi.max(angle)),
+                });
+            }
+        }
+        range
+    }
+
+    /// For a mesh read from a file: vertices on boundary faces are `Surface`, the rest
+    /// `Interior`; when the boundary has several components, the one that encloses the
+    /// others (largest bounding box) is `Outer` (an exterior shell).
+    pub fn classify_boundary(positions: &[[f64; 3]], tets: &[[u32; 4]]) -> Vec<VertexKind> {
+        let mut kinds = vec![VertexKind::Interior; positions.len()];
+        let mesh = TetMesh {
+            positions: positions.to_vec(),
+            tets: tets.to_vec(),
+            kinds: kinds.clone(),
+            vertex_tet_start: Vec::new(),
+            vertex_tets: Vec::new(),
+        };
+        let faces = mesh.boundary_faces();
+        // Components of the boundary surface, by union-find over face corners.
+        let mut parent: Vec<usize> = (0..positions.len()).collect();
+        let mut on_boundary = vec![false; positions.len()];
+        for f in &faces {
+            for &v in f {
+                on_boundary[v as usize] = true;
+            }
+            union(&mut parent, f[0] as usize, f[1] as usize);
+            union(&mut parent, f[0] as usize, f[2] as usize);
+        }
+        // Each component's bounding-box diagonal; the largest encloses the others.
+        let mut boxes: HashMap<usize, ([f64; 3], [f64; 3])> = HashMap::new();
+        for v in (0..positions.len()).filter(|&v| on_boundary[v]) {
+            let p = positions[v];
+            let b = boxes.entry(find(&mut parent, v)).or_insert((p, p));
+            for (k, &c) in p.iter().enumerate() {
+                b.0[k] = b.0[k].min(c);
+                b.1[k] = b.1[k].max(c);
+            }
+        }
+        let outer_root = (boxes.len() > 1)
+            .then(|| {
+                boxes
+                    .iter()
+                    .map(|(&r, b)| (norm(sub(b.1, b.0)), r))
+                    .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)))
+                    .map(|x| x.1)
+            })
+            .flatten();
+        for v in (0..positions.len()).filter(|&v| on_boundary[v]) {
+            kinds[v] = if Some(find(&mut parent, v)) == outer_root {
+                VertexKind::Outer
+            } else {
+                VertexKind::Surface
+            };
+        }
+        kinds
+    }
+}
+
+/// The six dihedral angles of a tetrahedron, in degrees.
+pub fn dihedral_angles_deg(p: [[f64; 3]; 4]) -> [f64; 6] {
+    // The angle at edge (i, j) is between the faces (i, j, k) and (i, j, l).
+    let pairs = [
+        (0, 1, 2, 3),
+        (0, 2, 1, 3),
+        (0, 3, 1, 2),
+        (1, 2, 0, 3),
+        (1, 3, 0, 2),
+        (2, 3, 0, 1),
+    ];
+    pairs.map(|(i, j, k, l)| {
+        let e = sub(p[j], p[i]);
+        let n1 = cross(e, sub(p[k], p[i]));
+        let n2 = cross(e, sub(p[l], p[i]));
+        let (a, b) = (norm(n1), norm(n2));
+        if a == 0.0 || b == 0.0 {
+            return 0.0;
+        }
+        (dot(n1, n2) / (a * b)).clamp(-1.0, 1.0).acos().to_degrees()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube_tets() -> TetMesh {
+        // The unit cube as 6 Kuhn tets around the diagonal 0-7 (corner bits x=1, y=2, z=4).
+        let positions: Vec<[f64; 3]> = (0..8)
+            .map(|c| [(c & 1) as f64, ((c >> 1) & 1) as f64, ((c >> 2) & 1) as f64])
+            .collect();
+        let mut tets = Vec::new();
+        for path in [[1, 3], [1, 5], [2, 3], [2, 6], [4, 5], [4, 6]] {
+            let mut t = [0u32, path[0], path[1], 7];
+            let m =
+                TetMesh::new(positions.clone(), vec![t], vec![VertexKind::Interior; 8]).unwrap();
+            if m.tet_volume(0) < 0.0 {
+                t.swap(2, 3);
+            }
+            tets.push(t);
+        }
+        let kinds = TetMesh::classify_boundary(&positions, &tets);
+        TetMesh::new(positions, tets, kinds).unwrap()
+    }
+
+    #[test]
+    fn a_cube_of_six_tets_has_the_right_invariants() {
+        let m = cube_tets();
+        assert!((m.volume() - 1.0).abs() < 1e-14);
+        assert_eq!(m.euler_characteristic(), 1);
+        assert_eq!(m.boundary_faces().len(), 12);
+        assert_eq!(m.kind_counts(), (0, 8, 0));
+        let (lo, hi) = m.dihedral_range_deg().unwrap();
+        assert!(
+            (lo - 45.0).abs() < 1e-9 && (hi - 90.0).abs() < 1e-9,
+            "{lo} {hi}"
+        );
+        // Boundary faces point outward: their signed volume against the centre is positive.
+        let c = [0.5; 3];
+        for f in m.boundary_faces() {
+            let [a, b, d] = f.map(|v| m.positions[v as usize]);
+            assert!(dot(sub(a, c), cross(sub(b, c), sub(d, c))) > 0.0);
+        }
+        for v in 0..8 {
+            assert!(!m.vertex_tets(v).is_empty());
+        }
+    }
+
+    #[test]
+    fn regular_tetrahedron_dihedrals() {
+        let s = 1.0 / 2f64.sqrt();
+        let p = [
+            [1.0, 0.0, -s],
+            [-1.0, 0.0, -s],
+            [0.0, 1.0, s],
+            [0.0, -1.0, s],
+        ];
+        for a in dihedral_angles_deg(p) {
+            assert!((a - (1.0f64 / 3.0).acos().to_degrees()).abs() < 1e-9);
+        }
+    }
+}

@@ -1,0 +1,319 @@
+//! Isosurface stuffing proper (Labelle & Shewchuk 2007, sec. 3): cut points, warping and
+//! the stencils that fill each background tetrahedron with the part of it inside the
+//! domain.
+//!
+//! Signs: a lattice vertex is `−` (inside, value < 0), `0` or `+`. A *cut point* lies on
+//! every background edge whose ends have strictly opposite signs, at the root of the
+//! domain function along the edge. A cut point closer than `α · |edge|` to an end
+//! *violates* that end; each violated vertex is *warped* onto its closest violating cut
+//! point and becomes `0`, which removes the cut points of its edges (α_long for
+//! axis-parallel edges, α_short for the others). Then each background tet is filled:
+//! - no `−` vertex: nothing (a tet whose four vertices are all `0` is kept when the
+//!   domain is negative at its centroid);
+//! - no `+` vertex: the tet itself;
+//! - one `−`: one tet, with `+` vertices replaced by their cut points;
+//! - two `−`, one `0`, one `+`: a pyramid, two tets;
+//! - two `−`, two `+`, or three `−`, one `+`: a prism, three tets.
+//!
+//! Quadrilaterals on background faces are split by the diagonal through the vertex with
+//! the smallest key (lattice vertices before cut points, then by index), a rule both
+//! neighbours see the same way, so the output is conforming; a prism whose quads all
+//! follow one total order can always be cut into three tets (Dompierre et al. 1999).
+
+use rayon::prelude::*;
+
+use crate::geom::{cross, dot, lerp, norm, sub};
+
+/// Edge-length fractions below which a cut point warps a vertex (the paper's values for
+/// dihedral angles between 10.7° and 164.8°).
+pub(crate) const ALPHA_LONG: f64 = 0.24999;
+pub(crate) const ALPHA_SHORT: f64 = 0.41189;
+/// Secant/bisection steps when locating a cut point on an edge.
+const ROOT_STEPS: usize = 30;
+
+/// Result of stuffing: the filled tets over lattice vertices and cut points.
+pub(crate) struct Stuffed {
+    /// Positions: lattice vertices (warped where warped) then cut points.
+    pub positions: Vec<[f64; 3]>,
+    /// Sign of each position after warping: −1, 0 or +1 (cut points are 0).
+    pub signs: Vec<i8>,
+    /// Output tets, positively oriented, over `positions`.
+    pub tets: Vec<[u32; 4]>,
+    /// Number of lattice vertices warped onto the surface.
+    pub warped: usize,
+    /// Number of cut points used.
+    pub cut_points: usize,
+    /// Output tets whose volume is not positive after warping (0 when the method's
+    /// guarantees hold).
+    pub inverted: usize,
+}
+
+/// Stuff the domain `value` (negative inside) into the background tets.
+pub(crate) fn stuff(
+    value: &(dyn Fn([f64; 3]) -> f64 + Sync),
+    mut positions: Vec<[f64; 3]>,
+    values: &[f64],
+    axis_parallel: &dyn Fn(u32, u32) -> bool,
+    tets: &[[u32; 4]],
+) -> Stuffed {
+    let n = positions.len();
+    let mut lattice_positions = positions.clone();
+    let mut signs: Vec<i8> = values.iter().map(|&f| sign(f)).collect();
+
+    // Edges with a sign change, and their cut points.
+    let mut edges: Vec<[u32; 2]> = Vec::new();
+    for t in tets {
+        for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+            let (a, b) = (t[i], t[j]);
+            if signs[a as usize] * signs[b as usize] < 0 {
+                edges.push([a.min(b), a.max(b)]);
+            }
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    // Parameter of each cut point along its edge (from the lower index).
+    let params: Vec<f64> = edges
+        .par_iter()
+        .map(|&[a, b]| {
+            let (pa, pb) = (positions[a as usize], positions[b as usize]);
+            root_on_edge(value, pa, pb, values[a as usize], values[b as usize])
+        })
+        .collect();
+
+    // Warping, in vertex order: each violated vertex moves to its closest violating
+    // cut point that an earlier warp has not removed, and takes every cut point of its
+    // edges with it.
+    let mut alive = vec![true; edges.len()];
+    let mut incident: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for (e, &[a, b]) in edges.iter().enumerate() {
+        incident[a as usize].push(e as u32);
+        incident[b as usize].push(e as u32);
+    }
+    let mut warped = 0;
+    for v in 0..n {
+        // The closest violating cut point that is still alive.
+        let mut choice: Option<(f64, usize)> = None;
+        for &e in &incident[v] {
+            let e = e as usize;
+            if !alive[e] {
+                continue;
+            }
+            let [a, b] = edges[e];
+            let t = if a as usize == v {
+                params[e]
+            } else {
+                1.0 - params[e]
+            };
+            let alpha = if axis_parallel(a, b) {
+                ALPHA_LONG
+            } else {
+                ALPHA_SHORT
+            };
+            if t < alpha {
+                let len = norm(sub(positions[b as usize], positions[a as usize]));
+                if choice.is_none_or(|(d, _)| t * len < d) {
+                    choice = Some((t * len, e));
+                }
+            }
+        }
+        if let Some((_, e)) = choice {
+            let [a, b] = edges[e];
+            positions[v] = lerp(positions[a as usize], positions[b as usize], params[e]);
+            signs[v] = 0;
+            warped += 1;
+            for &e in &incident[v] {
+                alive[e as usize] = false;
+            }
+        }
+    }
+
+    // Cut points that survive, appended after the lattice vertices.
+    let mut cut_index: std::collections::HashMap<[u32; 2], u32> = Default::default();
+    let mut out_positions = positions;
+    for (e, &[a, b]) in edges.iter().enumerate() {
+        // Both ends of a live cut edge are unwarped.
+        if alive[e] && signs[a as usize] * signs[b as usize] < 0 {
+            cut_index.insert([a, b], out_positions.len() as u32);
+            let p = lerp(
+                out_positions[a as usize],
+                out_positions[b as usize],
+                params[e],
+            );
+            out_positions.push(p);
+            lattice_positions.push(p);
+            signs.push(0);
+        }
+    }
+    let cut_points = cut_index.len();
+    let cut = |a: u32, b: u32| -> u32 { cut_index[&[a.min(b), a.max(b)]] };
+
+    // Fill.
+    let mut out = Vec::new();
+    for t in tets {
+        let s = t.map(|v| signs[v as usize]);
+        let neg: Vec<u32> = (0..4).filter(|&i| s[i] < 0).map(|i| t[i]).collect();
+        let zero: Vec<u32> = (0..4).filter(|&i| s[i] == 0).map(|i| t[i]).collect();
+        let pos: Vec<u32> = (0..4).filter(|&i| s[i] > 0).map(|i| t[i]).collect();
+        match (neg.len(), zero.len(), pos.len()) {
+            (0, 4, 0) => {
+                let c = t
+                    .iter()
+                    .map(|&v| out_positions[v as usize])
+                    .fold([0.0; 3], |acc, p| {
+                        [acc[0] + p[0], acc[1] + p[1], acc[2] + p[2]]
+                    });
+                if value([c[0] / 4.0, c[1] / 4.0, c[2] / 4.0]) < 0.0 {
+                    out.push(*t);
+                }
+            }
+            (0, _, _) => {}
+            (_, _, 0) => out.push(*t),
+            (1, _, _) => {
+                let n0 = neg[0];
+                let mut tet = *t;
+                for v in tet.iter_mut() {
+                    if signs[*v as usize] > 0 {
+                        *v = cut(n0, *v);
+                    }
+                }
+                out.push(tet);
+            }
+            (2, 1, 1) => {
+                let (n1, n2, z, p) = (neg[0], neg[1], zero[0], pos[0]);
+                let (c1, c2) = (cut(n1, p), cut(n2, p));
+                // Base quad (n1, n2, c2, c1): the diagonal goes through the smaller key.
+                if n1.min(n2) == n1 {
+                    out.push([z, n1, n2, c2]);
+                    out.push([z, n1, c2, c1]);
+                } else {
+                    out.push([z, n1, n2, c1]);
+                    out.push([z, n2, c2, c1]);
+                }
+            }
+            (2, 0, 2) => {
+                let (n1, n2, p1, p2) = (neg[0], neg[1], pos[0], pos[1]);
+                let prism = [n1, cut(n1, p1), cut(n1, p2), n2, cut(n2, p1), cut(n2, p2)];
+                split_prism(prism, &mut out);
+            }
+            (3, 0, 1) => {
+                let p = pos[0];
+                let prism = [
+                    neg[0],
+                    neg[1],
+                    neg[2],
+                    cut(neg[0], p),
+                    cut(neg[1], p),
+                    cut(neg[2], p),
+                ];
+                split_prism(prism, &mut out);
+            }
+            _ => unreachable!("sign counts add up to four"),
+        }
+    }
+    // Orient every output tet by its shape before warping (never degenerate: cut
+    // points lie strictly inside their edges), then count any that warping inverted.
+    let volume6 = |p: &[[f64; 3]], t: &[u32; 4]| {
+        let [a, b, c, d] = t.map(|v| p[v as usize]);
+        dot(sub(b, a), cross(sub(c, a), sub(d, a)))
+    };
+    let mut inverted = 0;
+    for t in &mut out {
+        if volume6(&lattice_positions, t) < 0.0 {
+            t.swap(2, 3);
+        }
+        if volume6(&out_positions, t) <= 0.0 {
+            inverted += 1;
+        }
+    }
+    Stuffed {
+        positions: out_positions,
+        signs,
+        tets: out,
+        warped,
+        cut_points,
+        inverted,
+    }
+}
+
+fn sign(f: f64) -> i8 {
+    if f < 0.0 {
+        -1
+    } else if f > 0.0 {
+        1
+    } else {
+        0
+    }
+}
+
+/// Cut a prism (bottom `p[0..3]`, top `p[3..6]`, vertical edges `p[i]`–`p[i+3]`) into
+/// three tets. Quad diagonals go through each quad's smallest index, so neighbours agree
+/// (indices order lattice vertices before cut points).
+fn split_prism(p: [u32; 6], out: &mut Vec<[u32; 4]>) {
+    // Move the smallest vertex to bottom position 0 by the prism's symmetries.
+    let m = (0..6).min_by_key(|&i| p[i]).unwrap_or(0);
+    let flip = |i: usize| (i + 3) % 6;
+    let rot = |i: usize, r: usize| (i / 3) * 3 + (i % 3 + r) % 3;
+    let (top, r) = (m >= 3, m % 3);
+    let map = |i: usize| {
+        let j = rot(i, r);
+        if top {
+            flip(j)
+        } else {
+            j
+        }
+    };
+    let q: [u32; 6] = std::array::from_fn(|i| p[map(i)]);
+    out.push([q[0], q[3], q[4], q[5]]);
+    // The quad opposite q[0]: (q1, q2, q5, q4).
+    let smallest = [q[1], q[2], q[5], q[4]].into_iter().min().unwrap_or(q[1]);
+    if smallest == q[1] || smallest == q[5] {
+        out.push([q[0], q[1], q[2], q[5]]);
+        out.push([q[0], q[1], q[5], q[4]]);
+    } else {
+        out.push([q[0], q[1], q[2], q[4]]);
+        out.push([q[0], q[2], q[5], q[4]]);
+    }
+}
+
+/// The parameter `t ∈ (0, 1)` of the root of `value` on the segment `a + t (b − a)`,
+/// where `fa` and `fb` have opposite signs: regula falsi (Illinois), safeguarded.
+fn root_on_edge(
+    value: &(dyn Fn([f64; 3]) -> f64 + Sync),
+    a: [f64; 3],
+    b: [f64; 3],
+    fa: f64,
+    fb: f64,
+) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    let (mut flo, mut fhi) = (fa, fb);
+    let mut side = 0i8;
+    let tol = 1e-9;
+    let mut t = flo / (flo - fhi);
+    for _ in 0..ROOT_STEPS {
+        t = (lo * fhi - hi * flo) / (fhi - flo);
+        if !(t > lo && t < hi) {
+            t = 0.5 * (lo + hi);
+        }
+        let f = value(lerp(a, b, t));
+        if f == 0.0 || hi - lo < tol {
+            break;
+        }
+        if (f < 0.0) == (flo < 0.0) {
+            lo = t;
+            flo = f;
+            if side == -1 {
+                fhi *= 0.5;
+            }
+            side = -1;
+        } else {
+            hi = t;
+            fhi = f;
+            if side == 1 {
+                flo *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    t.clamp(1e-6, 1.0 - 1e-6)
+}
