@@ -15,12 +15,16 @@
 //! Every fallible call returns [`Result`] with the one [`Error`] type, whose message is a
 //! single line naming the file and the line or byte where the problem is.
 
+pub mod distance;
 pub mod error;
 mod geom;
 pub mod io;
 pub mod mesh;
 pub mod pipeline;
 pub mod shapes;
+pub mod tet;
+pub mod volume;
 
 pub use error::{Error, ErrorKind, Location, Result};
 pub use mesh::{MeshReport, SurfaceMesh};
+pub use tet::{TetMesh, VertexKind};

@@ -1,0 +1,376 @@
+//! Bounding volume hierarchy over triangles, in flat arrays, with the exact
+//! point–triangle distance, the nearest-triangle query and the nearest ray hit.
+//!
+//! The tree is built top-down by splitting each node's triangles at the median of their
+//! centroids along the longest axis of the centroid bounds, until a node holds at most
+//! [`LEAF_SIZE`] triangles. A median split halves the count at every level, so the depth
+//! is at most ⌈log₂(n / LEAF_SIZE)⌉ + 1 (≤ 32 for any `u32` count), which bounds the
+//! fixed-size traversal stacks below. Triangles are stored reordered so that every node,
+//! leaf or not, owns a contiguous range of them.
+
+use crate::geom::{add, cross, dot, scale, sub};
+
+/// A node splits when it holds more triangles than this (leaves hold 4 to 8).
+pub(super) const LEAF_SIZE: usize = 8;
+
+/// Room for any traversal stack: depth + 1 entries are enough, and the depth of a
+/// median-split tree over at most 2³² triangles is below 32.
+pub(super) const STACK: usize = 64;
+
+/// One node: its box, its triangle range, and its children if any.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Node {
+    /// Box minimum corner.
+    pub lo: [f64; 3],
+    /// Box maximum corner.
+    pub hi: [f64; 3],
+    /// Index of the first child (the second is `left + 1`); 0 for a leaf (the root is
+    /// never a child, so 0 is free).
+    pub left: u32,
+    /// First triangle (in the reordered arrays).
+    pub start: u32,
+    /// One past the last triangle.
+    pub end: u32,
+}
+
+impl Node {
+    #[inline]
+    pub fn is_leaf(&self) -> bool {
+        self.left == 0
+    }
+
+    /// Squared distance from `p` to the box (0 inside).
+    #[inline]
+    fn dist2(&self, p: [f64; 3]) -> f64 {
+        let mut d2 = 0.0;
+        for ((lo, hi), x) in self.lo.iter().zip(self.hi).zip(p) {
+            let d = (lo - x).max(x - hi).max(0.0);
+            d2 += d * d;
+        }
+        d2
+    }
+
+    /// Parameter interval `[t0, t1]` where the ray `o + t d` is in the box, clipped to
+    /// `[0, t_max]`; `None` when empty. `inv` is `1 / d` componentwise (±∞ for 0).
+    #[inline]
+    fn ray_interval(&self, o: [f64; 3], inv: [f64; 3], t_max: f64) -> Option<f64> {
+        let mut t0 = 0.0f64;
+        let mut t1 = t_max;
+        for k in 0..3 {
+            let a = (self.lo[k] - o[k]) * inv[k];
+            let b = (self.hi[k] - o[k]) * inv[k];
+            // `min`/`max` ignore a NaN (0 · ∞ when the origin is on a slab with d = 0),
+            // which keeps the test conservative.
+            t0 = t0.max(a.min(b));
+            t1 = t1.min(a.max(b));
+        }
+        // Widen by a few ulps so that rounding never loses a hit on a box face.
+        (t0 <= t1 * (1.0 + 4.0 * f64::EPSILON)).then_some(t0)
+    }
+}
+
+/// The hierarchy and the triangles it holds, reordered.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Bvh {
+    /// Nodes; the root is node 0 (no nodes for no triangles).
+    pub nodes: Vec<Node>,
+    /// Triangle corners, in tree order.
+    pub tris: Vec<[[f64; 3]; 3]>,
+    /// The mesh face index of each triangle in tree order.
+    pub faces: Vec<u32>,
+}
+
+impl Bvh {
+    /// Build over `tris` (corners) with their mesh face indices `faces`.
+    pub fn build(tris: Vec<[[f64; 3]; 3]>, faces: Vec<u32>) -> Bvh {
+        let n = tris.len();
+        if n == 0 {
+            return Bvh::default();
+        }
+        let centroids: Vec<[f64; 3]> = tris
+            .iter()
+            .map(|t| scale(add(add(t[0], t[1]), t[2]), 1.0 / 3.0))
+            .collect();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let mut nodes = vec![Node {
+            lo: [0.0; 3],
+            hi: [0.0; 3],
+            left: 0,
+            start: 0,
+            end: n as u32,
+        }];
+        let mut todo = vec![0usize];
+        while let Some(ni) = todo.pop() {
+            let (s, e) = (nodes[ni].start as usize, nodes[ni].end as usize);
+            let (lo, hi) = bounds(order[s..e].iter().flat_map(|&i| tris[i as usize]));
+            nodes[ni].lo = lo;
+            nodes[ni].hi = hi;
+            if e - s <= LEAF_SIZE {
+                continue;
+            }
+            let (clo, chi) = bounds(order[s..e].iter().map(|&i| centroids[i as usize]));
+            let ext = sub(chi, clo);
+            let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
+                0
+            } else if ext[1] >= ext[2] {
+                1
+            } else {
+                2
+            };
+            let mid = s + (e - s) / 2;
+            // Ties (and equal centroids) split by index position, which still halves.
+            order[s..e].select_nth_unstable_by(mid - s, |&a, &b| {
+                centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+            });
+            let left = nodes.len();
+            for (start, end) in [(s, mid), (mid, e)] {
+                nodes.push(Node {
+                    lo: [0.0; 3],
+                    hi: [0.0; 3],
+                    left: 0,
+                    start: start as u32,
+                    end: end as u32,
+                });
+            }
+            nodes[ni].left = left as u32;
+            todo.push(left);
+            todo.push(left + 1);
+        }
+        let tris_sorted = order.iter().map(|&i| tris[i as usize]).collect();
+        let faces_sorted = order.iter().map(|&i| faces[i as usize]).collect();
+        Bvh {
+            nodes,
+            tris: tris_sorted,
+            faces: faces_sorted,
+        }
+    }
+
+    /// The triangle (tree-order index) nearest to `p`, the closest point on it and the
+    /// squared distance; `None` when there is no triangle or nothing is finitely near.
+    pub fn nearest(&self, p: [f64; 3]) -> Option<(usize, [f64; 3], f64)> {
+        let root = self.nodes.first()?;
+        let mut best = f64::INFINITY;
+        let mut found: Option<(usize, [f64; 3])> = None;
+        let mut stack = [(0u32, 0.0f64); STACK];
+        stack[0] = (0, root.dist2(p));
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (ni, bound) = stack[sp];
+            if bound >= best {
+                continue;
+            }
+            let node = &self.nodes[ni as usize];
+            if node.is_leaf() {
+                for t in node.start as usize..node.end as usize {
+                    let [a, b, c] = self.tris[t];
+                    let q = closest_on_triangle(p, a, b, c);
+                    let d = sub(p, q);
+                    let d2 = dot(d, d);
+                    if d2 < best {
+                        best = d2;
+                        found = Some((t, q));
+                    }
+                }
+            } else {
+                let l = node.left;
+                let r = l + 1;
+                let dl = self.nodes[l as usize].dist2(p);
+                let dr = self.nodes[r as usize].dist2(p);
+                // Push the farther child first so that the nearer one is visited first.
+                let pairs = if dl <= dr {
+                    [(r, dr), (l, dl)]
+                } else {
+                    [(l, dl), (r, dr)]
+                };
+                for (c, d) in pairs {
+                    if d < best {
+                        stack[sp] = (c, d);
+                        sp += 1;
+                    }
+                }
+            }
+        }
+        found.map(|(t, q)| (t, q, best))
+    }
+
+    /// Nearest hit `t` in `(t_min, t_max]` of the ray `o + t d`, with its tree-order
+    /// triangle index.
+    pub fn ray(&self, o: [f64; 3], d: [f64; 3], t_min: f64, t_max: f64) -> Option<(f64, usize)> {
+        let root = self.nodes.first()?;
+        let inv = [1.0 / d[0], 1.0 / d[1], 1.0 / d[2]];
+        let mut best = t_max;
+        let mut hit = None;
+        let mut stack = [(0u32, 0.0f64); STACK];
+        stack[0] = (0, root.ray_interval(o, inv, best)?);
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (ni, t_enter) = stack[sp];
+            if t_enter > best {
+                continue;
+            }
+            let node = &self.nodes[ni as usize];
+            if node.is_leaf() {
+                for t in node.start as usize..node.end as usize {
+                    let [a, b, c] = self.tris[t];
+                    if let Some(th) = ray_triangle(o, d, a, b, c) {
+                        if th > t_min && th <= best && (hit.is_none() || th < best) {
+                            best = th;
+                            hit = Some((th, t));
+                        }
+                    }
+                }
+            } else {
+                let l = node.left;
+                let r = l + 1;
+                let tl = self.nodes[l as usize].ray_interval(o, inv, best);
+                let tr = self.nodes[r as usize].ray_interval(o, inv, best);
+                let pairs = match (tl, tr) {
+                    (Some(a), Some(b)) if a <= b => [Some((r, b)), Some((l, a))],
+                    (Some(a), Some(b)) => [Some((l, a)), Some((r, b))],
+                    (a, b) => [a.map(|a| (l, a)), b.map(|b| (r, b))],
+                };
+                for (c, t) in pairs.into_iter().flatten() {
+                    stack[sp] = (c, t);
+                    sp += 1;
+                }
+            }
+        }
+        hit
+    }
+}
+
+/// Axis-aligned bounds of some points (NaN coordinates are ignored by `min`/`max`).
+fn bounds(points: impl Iterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
+/// Closest point to `p` on the triangle `abc`, by its Voronoi regions (Ericson,
+/// *Real-Time Collision Detection*, 5.1.5). An interior closest point is the projection
+/// onto the plane; a zero-area triangle, or rounding that contradicts the regions, falls
+/// back to the closest point on the three edges, so the result is always on the triangle.
+#[inline]
+pub(super) fn closest_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+    let ab = sub(b, a);
+    let ac = sub(c, a);
+    let ap = sub(p, a);
+    let d1 = dot(ab, ap);
+    let d2 = dot(ac, ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = sub(p, b);
+    let d3 = dot(ab, bp);
+    let d4 = dot(ac, bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let den = d1 - d3;
+        if den > 0.0 {
+            return add(a, scale(ab, d1 / den));
+        }
+        return closest_on_edges(p, a, b, c);
+    }
+    let cp = sub(p, c);
+    let d5 = dot(ab, cp);
+    let d6 = dot(ac, cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let den = d2 - d6;
+        if den > 0.0 {
+            return add(a, scale(ac, d2 / den));
+        }
+        return closest_on_edges(p, a, b, c);
+    }
+    let va = d3 * d6 - d5 * d4;
+    let e1 = d4 - d3;
+    let e2 = d5 - d6;
+    if va <= 0.0 && e1 >= 0.0 && e2 >= 0.0 {
+        let den = e1 + e2;
+        if den > 0.0 {
+            return add(b, scale(sub(c, b), e1 / den));
+        }
+        return closest_on_edges(p, a, b, c);
+    }
+    if va > 0.0 && vb > 0.0 && vc > 0.0 {
+        let n = cross(ab, ac);
+        let nn = dot(n, n);
+        if nn > 0.0 && nn.is_finite() {
+            return sub(p, scale(n, dot(n, ap) / nn));
+        }
+    }
+    closest_on_edges(p, a, b, c)
+}
+
+/// Closest point to `p` on the boundary of triangle `abc` (all of a degenerate one).
+fn closest_on_edges(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+    let mut best = a;
+    let mut best_d2 = f64::INFINITY;
+    for (u, v) in [(a, b), (b, c), (c, a)] {
+        let q = closest_on_segment(p, u, v);
+        let d = sub(p, q);
+        let d2 = dot(d, d);
+        if d2 < best_d2 {
+            best_d2 = d2;
+            best = q;
+        }
+    }
+    best
+}
+
+/// Closest point to `p` on the segment `uv` (`u` for a zero-length one).
+#[inline]
+fn closest_on_segment(p: [f64; 3], u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    let e = sub(v, u);
+    let ee = dot(e, e);
+    if ee.is_nan() || ee <= 0.0 {
+        return u;
+    }
+    let t = (dot(sub(p, u), e) / ee).clamp(0.0, 1.0);
+    add(u, scale(e, t))
+}
+
+/// Relative tolerance on the barycentric coordinates of a ray hit, so that a ray through
+/// a shared edge or vertex is not lost between two triangles by rounding.
+const BARY_TOL: f64 = 1e-10;
+
+/// Ray–triangle intersection (Möller–Trumbore): the parameter `t` of the hit of
+/// `o + t d` with the plane of `abc` when the hit lies in the triangle (up to
+/// [`BARY_TOL`]); `None` for a parallel ray or a zero-area triangle.
+#[inline]
+fn ray_triangle(o: [f64; 3], d: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Option<f64> {
+    let e1 = sub(b, a);
+    let e2 = sub(c, a);
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = sub(o, a);
+    let u = dot(tv, pv) * inv;
+    if !(-BARY_TOL..=1.0 + BARY_TOL).contains(&u) {
+        return None;
+    }
+    let qv = cross(tv, e1);
+    let v = dot(d, qv) * inv;
+    if v < -BARY_TOL || u + v > 1.0 + BARY_TOL {
+        return None;
+    }
+    let t = dot(e2, qv) * inv;
+    t.is_finite().then_some(t)
+}

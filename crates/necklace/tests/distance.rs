@@ -1,0 +1,329 @@
+//! Distance queries against ground truth: an independent brute-force point–triangle
+//! distance (written here: plane projection with an inside test, else the three edges),
+//! analytic spheres, exact winding numbers and known ray hits.
+
+use necklace::distance::{Closest, SurfaceDistance};
+use necklace::shapes::{Shape, ShapeKind};
+use necklace::SurfaceMesh;
+
+// ---------------------------------------------------------------------------------------
+// Small helpers, independent of the library's geometry code.
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Distance from `p` to the segment `uv`.
+fn segment_distance(p: [f64; 3], u: [f64; 3], v: [f64; 3]) -> f64 {
+    let e = sub(v, u);
+    let ee = dot(e, e);
+    let t = if ee > 0.0 {
+        (dot(sub(p, u), e) / ee).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    norm(sub(p, [u[0] + t * e[0], u[1] + t * e[1], u[2] + t * e[2]]))
+}
+
+/// Distance from `p` to triangle `abc`: if the projection onto the plane lies inside
+/// (three same-signed sub-triangle normals), the plane distance; else the nearest edge.
+fn triangle_distance(p: [f64; 3], [a, b, c]: [[f64; 3]; 3]) -> f64 {
+    let n = cross(sub(b, a), sub(c, a));
+    let nn = dot(n, n);
+    if nn > 0.0 {
+        let h = dot(sub(p, a), n) / nn;
+        let q = sub(p, [h * n[0], h * n[1], h * n[2]]);
+        let inside = [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|&(u, v)| dot(cross(sub(v, u), sub(q, u)), n) >= 0.0);
+        if inside {
+            return h.abs() * nn.sqrt();
+        }
+    }
+    segment_distance(p, a, b)
+        .min(segment_distance(p, b, c))
+        .min(segment_distance(p, c, a))
+}
+
+fn brute_force_distance(mesh: &SurfaceMesh, p: [f64; 3]) -> f64 {
+    (0..mesh.triangles.len())
+        .map(|f| triangle_distance(p, mesh.corners(f)))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Fixed-seed 64-bit LCG (Knuth's MMIX constants); uniform in [0, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// A point uniform in the box `(lo, hi)` grown by `grow` of its size on each side.
+    fn in_box(&mut self, (lo, hi): ([f64; 3], [f64; 3]), grow: f64) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let ext = hi[k] - lo[k];
+            lo[k] - grow * ext + (1.0 + 2.0 * grow) * ext * self.next()
+        })
+    }
+}
+
+fn shape(kind: ShapeKind, params: &[(&str, f64)]) -> SurfaceMesh {
+    let mut s = Shape::new(kind);
+    for &(name, value) in params {
+        s = s.with(name, value).unwrap();
+    }
+    s.mesh().unwrap()
+}
+
+fn sphere(res: f64) -> SurfaceMesh {
+    shape(ShapeKind::Sphere, &[("r", 1.0), ("res", res)])
+}
+
+fn translated(mesh: &SurfaceMesh, t: [f64; 3]) -> SurfaceMesh {
+    let mut m = mesh.clone();
+    for p in &mut m.positions {
+        *p = [p[0] + t[0], p[1] + t[1], p[2] + t[2]];
+    }
+    m
+}
+
+fn merged(a: &SurfaceMesh, b: &SurfaceMesh) -> SurfaceMesh {
+    let mut m = a.clone();
+    let off = a.positions.len() as u32;
+    m.positions.extend_from_slice(&b.positions);
+    m.triangles
+        .extend(b.triangles.iter().map(|t| t.map(|v| v + off)));
+    m
+}
+
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn shared_across_threads() {
+    fn send_sync<T: Send + Sync>() {}
+    send_sync::<SurfaceDistance>();
+}
+
+#[test]
+fn distance_equals_brute_force_on_torus_and_dumbbell() {
+    let meshes = [
+        shape(ShapeKind::Torus, &[("res", 32.0)]),
+        shape(ShapeKind::Dumbbell, &[("res", 40.0)]),
+    ];
+    let mut rng = Lcg(0x5eed);
+    for mesh in &meshes {
+        let sd = SurfaceDistance::new(mesh);
+        let bbox = mesh.bounding_box().unwrap();
+        let diag = mesh.bbox_diagonal();
+        let mut points: Vec<[f64; 3]> = (0..200).map(|_| rng.in_box(bbox, 0.3)).collect();
+        // Points right next to the surface too: vertices pushed off a little.
+        for i in 0..50 {
+            let v = mesh.positions[(i * 7919) % mesh.positions.len()];
+            let e = 1e-3 * diag * (rng.next() - 0.5);
+            points.push([v[0] + e, v[1] - e, v[2] + 0.5 * e]);
+        }
+        for p in points {
+            let want = brute_force_distance(mesh, p);
+            let c = sd.closest_point(p);
+            // 1e-12 relative; the absolute floor only matters for a point on the surface.
+            let tol = 1e-12 * want + 1e-15 * diag;
+            assert!(
+                (c.distance - want).abs() <= tol,
+                "{p:?}: {} vs brute force {want}",
+                c.distance
+            );
+            assert_eq!(sd.distance(p), c.distance);
+            // The named face is a nearest one.
+            let on_face = triangle_distance(p, mesh.corners(c.face as usize));
+            assert!((on_face - want).abs() <= tol);
+        }
+    }
+}
+
+#[test]
+fn sphere_signed_distance_and_closest_point() {
+    let mesh = sphere(24.0);
+    let sd = SurfaceDistance::new(&mesh);
+    assert_eq!(sd.num_triangles(), mesh.triangles.len());
+    let d0 = sd.signed_distance([0.0; 3]);
+    assert!(
+        (d0 + 1.0).abs() < 0.01,
+        "signed distance at the centre: {d0}"
+    );
+    let d3 = sd.signed_distance([3.0, 0.0, 0.0]);
+    assert!((d3 - 2.0).abs() < 0.01, "signed distance at (3,0,0): {d3}");
+    assert!(sd.is_inside([0.0; 3]) && !sd.is_inside([3.0, 0.0, 0.0]));
+
+    let mut rng = Lcg(7);
+    for _ in 0..100 {
+        let p = rng.in_box(([-2.0; 3], [2.0; 3]), 0.0);
+        let c: Closest = sd.closest_point(p);
+        let on_face = triangle_distance(c.point, mesh.corners(c.face as usize));
+        assert!(on_face < 1e-14, "closest point {on_face} off its face");
+        assert!((norm(sub(p, c.point)) - c.distance).abs() < 1e-14);
+        // Against the analytic sphere, within the chordal error.
+        assert!((c.distance - (norm(p) - 1.0).abs()).abs() < 0.01);
+        let s = sd.signed_distance(p);
+        assert_eq!(s.abs(), c.distance);
+        assert!(s.abs() < 0.01 || (s < 0.0) == (norm(p) < 1.0));
+    }
+}
+
+#[test]
+fn fast_winding_number_matches_exact() {
+    let mesh = shape(ShapeKind::Torus, &[("res", 32.0)]);
+    let sd = SurfaceDistance::new(&mesh);
+    let bbox = mesh.bounding_box().unwrap();
+    let diag = mesh.bbox_diagonal();
+    let mut rng = Lcg(42);
+    let (mut inside, mut outside, mut near, mut far) = (0, 0, 0, 0);
+    let mut max_err: f64 = 0.0;
+    while inside + outside < 400 {
+        // Mostly near the shape, some far away.
+        let grow = if rng.next() < 0.8 { 0.1 } else { 5.0 };
+        let p = rng.in_box(bbox, grow);
+        let d = sd.distance(p);
+        if d <= 0.01 * diag {
+            continue;
+        }
+        let exact = sd.winding_number_exact(p);
+        let fast = sd.winding_number(p);
+        max_err = max_err.max((fast - exact).abs());
+        assert!(
+            (fast - exact).abs() < 0.01,
+            "{p:?}: fast {fast}, exact {exact}"
+        );
+        // On a closed outward mesh the exact number is 1 inside and 0 outside.
+        if exact > 0.5 {
+            assert!((exact - 1.0).abs() < 1e-6, "{p:?}: {exact}");
+            inside += 1;
+        } else {
+            assert!(exact.abs() < 1e-6, "{p:?}: {exact}");
+            outside += 1;
+        }
+        assert_eq!(sd.is_inside(p), exact > 0.5);
+        if d < 0.05 * diag {
+            near += 1;
+        }
+        if d > diag {
+            far += 1;
+        }
+    }
+    assert!(inside > 20 && outside > 20 && near > 50 && far > 20);
+    assert!(max_err < 0.01);
+}
+
+#[test]
+fn sphere_with_a_hole_still_reads_as_solid() {
+    let mut mesh = sphere(24.0);
+    let before = mesh.triangles.len();
+    let positions = mesh.positions.clone();
+    mesh.triangles
+        .retain(|t| t.iter().any(|&v| positions[v as usize][2] < 0.9));
+    assert!(mesh.triangles.len() < before);
+    let sd = SurfaceDistance::new(&mesh);
+    let w = sd.winding_number([0.0; 3]);
+    assert!(w > 0.9 && w < 1.0, "winding number at the centre: {w}");
+    assert!(sd.is_inside([0.0; 3]) && sd.is_inside([0.0, 0.0, 0.5]));
+    for p in [
+        [3.0, 0.0, 0.0],
+        [0.0, 0.0, 2.0],
+        [0.0, 0.0, -2.0],
+        [0.0, 1.5, 1.0],
+    ] {
+        assert!(!sd.is_inside(p), "{p:?} reads as inside");
+        assert!(sd.signed_distance(p) > 0.0);
+    }
+    assert!(sd.signed_distance([0.0; 3]) < 0.0);
+}
+
+#[test]
+fn overlapping_spheres_give_winding_number_two() {
+    let a = sphere(16.0);
+    let b = translated(&a, [1.0, 0.0, 0.0]);
+    let sd = SurfaceDistance::new(&merged(&a, &b));
+    let overlap = [0.5, 0.0, 0.0];
+    assert!((sd.winding_number_exact(overlap) - 2.0).abs() < 1e-6);
+    assert!((sd.winding_number(overlap) - 2.0).abs() < 0.01);
+    assert!(sd.is_inside(overlap) && sd.signed_distance(overlap) < 0.0);
+    assert!((sd.winding_number([-0.5, 0.0, 0.0]) - 1.0).abs() < 0.01);
+    assert!(!sd.is_inside([0.5, 0.0, 2.0]));
+}
+
+#[test]
+fn ray_hits_sphere_and_misses_elsewhere() {
+    let mesh = sphere(24.0);
+    let sd = SurfaceDistance::new(&mesh);
+    let (t, f) = sd
+        .ray_hit([0.0; 3], [1.0, 0.0, 0.0], f64::INFINITY)
+        .unwrap();
+    assert!((t - 1.0).abs() < 0.01, "t = {t}");
+    assert!(triangle_distance([t, 0.0, 0.0], mesh.corners(f as usize)) < 1e-12);
+    // A non-unit direction: t in units of dir.
+    let (t2, f2) = sd
+        .ray_hit([0.0; 3], [2.0, 0.0, 0.0], f64::INFINITY)
+        .unwrap();
+    assert!((t2 - 0.5 * t).abs() < 1e-12 && f2 == f);
+    // t_max before the surface.
+    assert_eq!(sd.ray_hit([0.0; 3], [1.0, 0.0, 0.0], 0.9), None);
+    // Every direction from the centre hits, at about the radius.
+    let mut rng = Lcg(3);
+    for _ in 0..100 {
+        let d = [rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5];
+        let (t, _) = sd
+            .ray_hit([0.0; 3], d, f64::INFINITY)
+            .expect("a ray from inside hits");
+        assert!((t * norm(d) - 1.0).abs() < 0.01);
+    }
+
+    let away = SurfaceDistance::new(&translated(&mesh, [5.0, 0.0, 0.0]));
+    assert_eq!(
+        away.ray_hit([0.0; 3], [-1.0, 0.0, 0.0], f64::INFINITY),
+        None
+    );
+    assert_eq!(away.ray_hit([0.0; 3], [0.0, 1.0, 0.0], f64::INFINITY), None);
+    let (t, _) = away
+        .ray_hit([0.0; 3], [1.0, 0.0, 0.0], f64::INFINITY)
+        .unwrap();
+    assert!((t - 4.0).abs() < 0.01, "t = {t}");
+}
+
+#[test]
+fn batches_equal_per_point_results_bit_for_bit() {
+    let mesh = shape(ShapeKind::Dumbbell, &[("res", 32.0)]);
+    let sd = SurfaceDistance::new(&mesh);
+    let mut rng = Lcg(99);
+    let bbox = mesh.bounding_box().unwrap();
+    let points: Vec<[f64; 3]> = (0..2000).map(|_| rng.in_box(bbox, 0.2)).collect();
+    let single: Vec<u64> = points
+        .iter()
+        .map(|&p| sd.signed_distance(p).to_bits())
+        .collect();
+    let unsigned: Vec<u64> = points.iter().map(|&p| sd.distance(p).to_bits()).collect();
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (s, d) = pool.install(|| (sd.signed_distances(&points), sd.distances(&points)));
+        assert!(s.iter().map(|x| x.to_bits()).eq(single.iter().copied()));
+        assert!(d.iter().map(|x| x.to_bits()).eq(unsigned.iter().copied()));
+    }
+    assert!(single.iter().any(|&b| f64::from_bits(b) < 0.0));
+}
