@@ -14,17 +14,28 @@
 //! face order are kept as in the file, so writing and reading back gives the same mesh
 //! (STL has no shared vertices: coincident corners are welded exactly, in order of first
 //! appearance).
+//!
+//! Tetrahedral meshes have their own entry points, [`read_tet_mesh`] and
+//! [`write_tet_mesh`] (plus byte-level variants), for TetGen `.node`/`.ele`, Medit
+//! `.mesh`, Gmsh `.msh` (2.2 and 4.1 ascii) and VTK XML `.vtu` (ascii): vertex and tet
+//! order are kept, every tet is re-oriented to positive volume, and vertex kinds come
+//! from [`TetMesh::classify_boundary`] unless the file carries the kinds we wrote.
 
+mod gmsh;
+mod medit;
 mod obj;
 mod off;
 mod ply;
 mod stl;
+mod tetgen;
 mod text;
+mod vtu;
 
 use std::path::Path;
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::SurfaceMesh;
+use crate::tet::{TetMesh, VertexKind};
 
 /// A mesh file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -151,4 +162,220 @@ pub fn write_mesh_bytes(mesh: &SurfaceMesh, format: Format) -> Result<Vec<u8>> {
         }
     }
     Ok(out)
+}
+
+/// A tetrahedral-mesh file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TetFormat {
+    /// TetGen: a pair of files, `X.node` (vertices) and `X.ele` (tets).
+    TetGen,
+    /// Medit `.mesh` (ascii).
+    Medit,
+    /// Gmsh `.msh`: reads versions 2.2 and 4.1 ascii, writes 4.1 ascii.
+    Gmsh,
+    /// VTK XML UnstructuredGrid `.vtu` (ascii data arrays).
+    Vtu,
+}
+
+impl TetFormat {
+    /// The format named by a file extension (case-insensitive): `.node` or `.ele`,
+    /// `.mesh`, `.msh`, `.vtu`.
+    pub fn from_extension(path: &Path) -> Option<TetFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "node" | "ele" => Some(TetFormat::TetGen),
+            "mesh" => Some(TetFormat::Medit),
+            "msh" => Some(TetFormat::Gmsh),
+            "vtu" => Some(TetFormat::Vtu),
+            _ => None,
+        }
+    }
+}
+
+/// Read a tetrahedral mesh; the format comes from the extension (see [`TetFormat`]).
+/// For TetGen the path may name either `X.node` or `X.ele`: both are read. Errors name
+/// the file they were found in.
+///
+/// Vertex and tet order are kept; tets with negative volume get two vertices swapped.
+/// Vertex kinds are restored from files we wrote (`.vtu` point data `kind`, `.mesh`
+/// vertex references after the `# necklace kinds` comment), else computed with
+/// [`TetMesh::classify_boundary`].
+pub fn read_tet_mesh(path: impl AsRef<Path>) -> Result<TetMesh> {
+    let path = path.as_ref();
+    let format = TetFormat::from_extension(path).ok_or_else(|| {
+        Error::new(
+            ErrorKind::UnknownFormat,
+            "unknown tet mesh format (expected .node, .ele, .mesh, .msh or .vtu)",
+        )
+        .in_file(path)
+    })?;
+    if format == TetFormat::TetGen {
+        let node_path = path.with_extension("node");
+        let ele_path = path.with_extension("ele");
+        let node = read_file(&node_path)?;
+        let ele = read_file(&ele_path)?;
+        return tetgen::read(
+            &node,
+            &ele,
+            &node_path.display().to_string(),
+            &ele_path.display().to_string(),
+        );
+    }
+    let data = read_file(path)?;
+    read_tet_mesh_bytes(&data, format).map_err(|e| e.in_file(path))
+}
+
+/// Read a tetrahedral mesh from bytes in a single-file format (Medit, Gmsh or VTU).
+/// TetGen needs two files: use [`read_tetgen_bytes`] ([`ErrorKind::InvalidArgument`]
+/// here).
+pub fn read_tet_mesh_bytes(data: &[u8], format: TetFormat) -> Result<TetMesh> {
+    if data.iter().all(u8::is_ascii_whitespace) {
+        return Err(Error::new(ErrorKind::Empty, "empty file"));
+    }
+    match format {
+        TetFormat::TetGen => Err(Error::invalid_argument(
+            "TetGen meshes are two files: use read_tetgen_bytes",
+        )),
+        TetFormat::Medit => medit::read(data),
+        TetFormat::Gmsh => gmsh::read(data),
+        TetFormat::Vtu => vtu::read(data),
+    }
+}
+
+/// Read a TetGen mesh from the contents of its `.node` and `.ele` files. Errors name
+/// the part they were found in (`.node` or `.ele`).
+pub fn read_tetgen_bytes(node: &[u8], ele: &[u8]) -> Result<TetMesh> {
+    tetgen::read(node, ele, ".node", ".ele")
+}
+
+/// Write a tetrahedral mesh; the format comes from the extension: `.vtu`, `.mesh`,
+/// `.msh` (Gmsh 4.1 ascii), or `.node` / `.ele` (writes both `X.node` and `X.ele`).
+///
+/// `fields` are per-vertex scalar fields `(name, values)`, one value per vertex
+/// ([`ErrorKind::InvalidArgument`] otherwise), written as VTU point data (Float64);
+/// the other formats check but ignore them.
+pub fn write_tet_mesh(
+    path: impl AsRef<Path>,
+    mesh: &TetMesh,
+    fields: &[(&str, &[f64])],
+) -> Result<()> {
+    let path = path.as_ref();
+    let format = TetFormat::from_extension(path).ok_or_else(|| {
+        Error::new(
+            ErrorKind::UnknownFormat,
+            "cannot tell the output format: use .vtu, .mesh, .msh or .node",
+        )
+        .in_file(path)
+    })?;
+    if format == TetFormat::TetGen {
+        check_tet_mesh(mesh, fields).map_err(|e| e.in_file(path))?;
+        let (node, ele) = tetgen::write(mesh);
+        write_file(&path.with_extension("node"), &node)?;
+        return write_file(&path.with_extension("ele"), &ele);
+    }
+    let bytes = write_tet_mesh_bytes(mesh, format, fields).map_err(|e| e.in_file(path))?;
+    write_file(path, &bytes)
+}
+
+/// Encode a tetrahedral mesh in a single-file format (VTU, Medit or Gmsh 4.1); `fields`
+/// as in [`write_tet_mesh`]. TetGen needs two files: use [`write_tetgen_bytes`]
+/// ([`ErrorKind::InvalidArgument`] here).
+pub fn write_tet_mesh_bytes(
+    mesh: &TetMesh,
+    format: TetFormat,
+    fields: &[(&str, &[f64])],
+) -> Result<Vec<u8>> {
+    check_tet_mesh(mesh, fields)?;
+    let mut out = Vec::new();
+    match format {
+        TetFormat::TetGen => {
+            return Err(Error::invalid_argument(
+                "TetGen meshes are two files: use write_tetgen_bytes",
+            ))
+        }
+        TetFormat::Medit => medit::write(mesh, &mut out),
+        TetFormat::Gmsh => gmsh::write(mesh, &mut out),
+        TetFormat::Vtu => vtu::write(mesh, fields, &mut out)?,
+    }
+    Ok(out)
+}
+
+/// Encode a tetrahedral mesh as TetGen `(.node, .ele)` contents.
+pub fn write_tetgen_bytes(mesh: &TetMesh) -> Result<(Vec<u8>, Vec<u8>)> {
+    check_tet_mesh(mesh, &[])?;
+    Ok(tetgen::write(mesh))
+}
+
+fn read_file(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path)
+        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot read: {e}")).in_file(path))
+}
+
+fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    std::fs::write(path, bytes)
+        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+}
+
+/// Check what the writers index by: one kind per vertex, tet corners in range (the
+/// fields of a [`TetMesh`] are public), and one value per vertex in every field.
+fn check_tet_mesh(mesh: &TetMesh, fields: &[(&str, &[f64])]) -> Result<()> {
+    let n = mesh.positions.len();
+    if mesh.kinds.len() != n {
+        return Err(Error::invalid_argument(format!(
+            "{} vertex kinds for {n} vertices",
+            mesh.kinds.len()
+        )));
+    }
+    if let Some(v) = mesh.tets.iter().flatten().find(|&&v| v as usize >= n) {
+        return Err(Error::invalid_argument(format!(
+            "a tet uses vertex {v}, but there are {n} vertices"
+        )));
+    }
+    for (name, values) in fields {
+        if values.len() != n {
+            return Err(Error::invalid_argument(format!(
+                "field '{name}' has {} values for {n} vertices",
+                values.len()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The last step of every tet reader: vertex kinds (the file's, or classified from the
+/// boundary), then every negatively oriented tet gets its last two vertices swapped.
+/// The readers have checked indices and coordinates already.
+fn build_tet_mesh(
+    positions: Vec<[f64; 3]>,
+    tets: Vec<[u32; 4]>,
+    kinds: Option<Vec<VertexKind>>,
+) -> Result<TetMesh> {
+    let kinds = kinds.unwrap_or_else(|| TetMesh::classify_boundary(&positions, &tets));
+    let mut mesh = TetMesh::new(positions, tets, kinds)?;
+    // Swapping within a tet leaves the vertex-to-tet adjacency unchanged.
+    for t in 0..mesh.num_tets() {
+        if mesh.tet_volume(t) < 0.0 {
+            mesh.tets[t].swap(2, 3);
+        }
+    }
+    Ok(mesh)
+}
+
+/// The code of a vertex kind in the files we write: 0 interior, 1 surface, 2 outer.
+fn kind_code(kind: VertexKind) -> u8 {
+    match kind {
+        VertexKind::Interior => 0,
+        VertexKind::Surface => 1,
+        VertexKind::Outer => 2,
+    }
+}
+
+/// The vertex kind of a code written by [`kind_code`].
+fn kind_from_code(code: i64) -> Option<VertexKind> {
+    match code {
+        0 => Some(VertexKind::Interior),
+        1 => Some(VertexKind::Surface),
+        2 => Some(VertexKind::Outer),
+        _ => None,
+    }
 }

@@ -1,0 +1,669 @@
+//! VTK XML UnstructuredGrid files (`.vtu`) with ascii data arrays.
+//!
+//! Reading: a small XML scanner (no external parser) over the tags `<VTKFile
+//! type="UnstructuredGrid">`, one `<Piece>`, and the `<DataArray format="ascii">`
+//! elements of `<Points>` (3 components), `<Cells>` (`connectivity`, `offsets`, `types`)
+//! and `<PointData>`; other elements and attributes, `<?xml?>` declarations and
+//! `<!-- -->` comments (outside data arrays) are ignored. Cells of type 10 (tetra) are
+//! kept, type 24 (quadratic tetra, 10 points) is reduced to its 4 corners, all other
+//! cell types are skipped unchecked. A point data array named `kind` (our writer's)
+//! restores the vertex kinds (0 interior, 1 surface, 2 outer); otherwise kinds are
+//! classified from the boundary. Other point data is ignored.
+//!
+//! Binary or appended data, several pieces and other dataset types are
+//! [`ErrorKind::Unsupported`]. Errors carry the line: malformed XML or a missing array is
+//! [`ErrorKind::Syntax`], the file ending inside an element [`ErrorKind::Truncated`],
+//! counts that disagree with `NumberOfPoints`/`NumberOfCells` or with each other
+//! [`ErrorKind::CountMismatch`], a NaN or infinite coordinate [`ErrorKind::NonFinite`],
+//! a point index or offset out of range [`ErrorKind::IndexOutOfRange`], and no tets
+//! [`ErrorKind::Empty`].
+//!
+//! Writing: `<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian">`,
+//! Points (Float64, Rust's shortest round-trip `{}` formatting), Cells (connectivity and
+//! offsets Int64, types UInt8 = 10), and PointData: `kind` (Int32) and every field
+//! (Float64; a field named `kind`, a repeated name or a non-finite value is rejected).
+
+use std::io::Write;
+
+use super::text;
+use crate::error::{Error, ErrorKind, Result};
+use crate::tet::TetMesh;
+
+/// VTK cell types we read: tetra and quadratic tetra.
+const VTK_TETRA: i64 = 10;
+const VTK_QUADRATIC_TETRA: i64 = 24;
+
+/// A start or end tag.
+struct Tag<'a> {
+    name: &'a [u8],
+    attributes: Vec<(&'a [u8], String)>,
+    closing: bool,
+    self_closing: bool,
+    line: usize,
+}
+
+impl Tag<'_> {
+    fn attribute(&self, key: &str) -> Option<&str> {
+        self.attributes
+            .iter()
+            .find(|(k, _)| *k == key.as_bytes())
+            .map(|(_, value)| value.as_str())
+    }
+
+    /// An integer attribute, if present.
+    fn int_attribute(&self, key: &str) -> Result<Option<i64>> {
+        self.attribute(key)
+            .map(|value| text::parse_int(value.as_bytes(), key, self.line))
+            .transpose()
+    }
+}
+
+/// An ascii data array: its text and where it starts.
+struct Array<'a> {
+    section: &'a [u8],
+    name: String,
+    components: i64,
+    content: &'a [u8],
+    line: usize,
+}
+
+/// Read a VTU file.
+pub(crate) fn read(data: &[u8]) -> Result<TetMesh> {
+    let mut scanner = Scanner {
+        data,
+        position: 0,
+        line: 1,
+    };
+    let mut open: Vec<&[u8]> = Vec::new();
+    let mut arrays = Vec::new();
+    let mut piece = None;
+    let mut root = false;
+    while let Some(tag) = scanner.next_tag()? {
+        if tag.closing {
+            match open.pop() {
+                Some(name) if name == tag.name => continue,
+                _ => {
+                    return Err(Error::new(
+                        ErrorKind::Syntax,
+                        format!("unexpected closing tag {}", text::shown(tag.name)),
+                    )
+                    .at_line(tag.line))
+                }
+            }
+        }
+        if open.is_empty() && tag.name != b"VTKFile" {
+            return Err(Error::new(
+                ErrorKind::Syntax,
+                format!("expected <VTKFile>, found {}", text::shown(tag.name)),
+            )
+            .at_line(tag.line));
+        }
+        match tag.name {
+            b"VTKFile" => {
+                check_file_type(&tag, !root)?;
+                root = true;
+            }
+            b"Piece" if piece.is_some() => {
+                return Err(
+                    Error::new(ErrorKind::Unsupported, "several pieces are not supported")
+                        .at_line(tag.line),
+                )
+            }
+            b"Piece" => {
+                let points = tag.int_attribute("NumberOfPoints")?;
+                let cells = tag.int_attribute("NumberOfCells")?;
+                piece = Some((points, cells, tag.line));
+            }
+            b"AppendedData" => {
+                return Err(Error::new(
+                    ErrorKind::Unsupported,
+                    "appended data is not supported (ascii expected)",
+                )
+                .at_line(tag.line))
+            }
+            b"DataArray" if !tag.self_closing => {
+                let section = open.last().copied().unwrap_or_default();
+                arrays.push(scanner.data_array(&tag, section)?);
+                continue;
+            }
+            _ => {}
+        }
+        if !tag.self_closing {
+            open.push(tag.name);
+        }
+    }
+    let end = text::last_line(data);
+    if !root {
+        return Err(
+            Error::new(ErrorKind::Syntax, "not a VTK XML file (no <VTKFile>)").at_line(end),
+        );
+    }
+    if let Some(name) = open.last() {
+        return Err(Error::new(
+            ErrorKind::Truncated,
+            format!("file ends before </{}>", String::from_utf8_lossy(name)),
+        )
+        .at_line(end));
+    }
+    let Some((point_count, cell_count, piece_line)) = piece else {
+        return Err(Error::new(ErrorKind::Empty, "no <Piece>").at_line(end));
+    };
+
+    // Points.
+    let points = find(&arrays, b"Points", None, end)?;
+    if points.components != 3 {
+        return Err(Error::new(
+            ErrorKind::Syntax,
+            format!("points have {} components, expected 3", points.components),
+        )
+        .at_line(points.line));
+    }
+    let coordinates = floats(points)?;
+    if coordinates.len() % 3 != 0 {
+        return Err(Error::new(
+            ErrorKind::CountMismatch,
+            format!(
+                "{} point coordinates, not a multiple of 3",
+                coordinates.len()
+            ),
+        )
+        .at_line(points.line));
+    }
+    let positions: Vec<[f64; 3]> = coordinates
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    let n = positions.len();
+    check_count(point_count, n, "NumberOfPoints", "points", piece_line)?;
+
+    // Cells.
+    let connectivity = ints(find(&arrays, b"Cells", Some("connectivity"), end)?)?;
+    let offsets = ints(find(&arrays, b"Cells", Some("offsets"), end)?)?;
+    let types_array = find(&arrays, b"Cells", Some("types"), end)?;
+    let types = ints(types_array)?;
+    if offsets.len() != types.len() {
+        return Err(Error::new(
+            ErrorKind::CountMismatch,
+            format!(
+                "{} cell offsets for {} cell types",
+                offsets.len(),
+                types.len()
+            ),
+        )
+        .at_line(types_array.line));
+    }
+    check_count(
+        cell_count,
+        types.len(),
+        "NumberOfCells",
+        "cells",
+        piece_line,
+    )?;
+    let mut tets = Vec::new();
+    let mut start = 0;
+    for (&(offset, offset_line), &(cell_type, type_line)) in offsets.iter().zip(&types) {
+        let stop = usize::try_from(offset)
+            .ok()
+            .filter(|&stop| start <= stop && stop <= connectivity.len())
+            .ok_or_else(|| {
+                Error::new(
+                    ErrorKind::IndexOutOfRange,
+                    format!(
+                        "cell offset {offset} out of range ({start} to {} expected)",
+                        connectivity.len()
+                    ),
+                )
+                .at_line(offset_line)
+            })?;
+        let cell = &connectivity[start..stop];
+        start = stop;
+        let size = match cell_type {
+            VTK_TETRA => 4,
+            VTK_QUADRATIC_TETRA => 10,
+            _ => continue,
+        };
+        if cell.len() != size {
+            return Err(Error::new(
+                ErrorKind::Syntax,
+                format!(
+                    "cell of type {cell_type} has {} points, expected {size}",
+                    cell.len()
+                ),
+            )
+            .at_line(type_line));
+        }
+        let mut tet = [0u32; 4];
+        for (corner, &(index, line)) in tet.iter_mut().zip(cell) {
+            *corner = usize::try_from(index)
+                .ok()
+                .filter(|&i| i < n)
+                .and_then(|i| u32::try_from(i).ok())
+                .ok_or_else(|| {
+                    Error::new(
+                        ErrorKind::IndexOutOfRange,
+                        format!("point index {index} out of range ({n} points)"),
+                    )
+                    .at_line(line)
+                })?;
+        }
+        tets.push(tet);
+    }
+    if tets.is_empty() {
+        return Err(Error::new(ErrorKind::Empty, "no tetrahedra").at_line(end));
+    }
+
+    // Vertex kinds written by us.
+    let kinds = match arrays
+        .iter()
+        .find(|a| a.section == b"PointData" && a.name == "kind")
+    {
+        None => None,
+        Some(array) => {
+            let codes = ints(array)?;
+            if codes.len() != n {
+                return Err(Error::new(
+                    ErrorKind::CountMismatch,
+                    format!("{} kinds for {n} points", codes.len()),
+                )
+                .at_line(array.line));
+            }
+            let kinds = codes.iter().map(|&(code, line)| {
+                super::kind_from_code(code).ok_or_else(|| {
+                    Error::new(
+                        ErrorKind::Syntax,
+                        format!("kind {code} is not a kind code (0, 1 or 2)"),
+                    )
+                    .at_line(line)
+                })
+            });
+            Some(kinds.collect::<Result<Vec<_>>>()?)
+        }
+    };
+    super::build_tet_mesh(positions, tets, kinds)
+}
+
+/// `<VTKFile>` must be the one root and an UnstructuredGrid.
+fn check_file_type(tag: &Tag, is_root: bool) -> Result<()> {
+    if !is_root {
+        return Err(Error::new(ErrorKind::Syntax, "a second <VTKFile>").at_line(tag.line));
+    }
+    match tag.attribute("type") {
+        Some("UnstructuredGrid") => Ok(()),
+        other => Err(Error::new(
+            ErrorKind::Unsupported,
+            format!(
+                "VTK dataset type {} is not supported (UnstructuredGrid expected)",
+                text::shown(other.unwrap_or_default().as_bytes())
+            ),
+        )
+        .at_line(tag.line)),
+    }
+}
+
+/// The first array in `section` (with `name`, if given).
+fn find<'x, 'a>(
+    arrays: &'x [Array<'a>],
+    section: &[u8],
+    name: Option<&str>,
+    end: usize,
+) -> Result<&'x Array<'a>> {
+    arrays
+        .iter()
+        .find(|a| {
+            a.section == section
+                && match name {
+                    Some(name) => a.name == name,
+                    None => true,
+                }
+        })
+        .ok_or_else(|| {
+            let section = String::from_utf8_lossy(section);
+            let message = match name {
+                Some(name) => format!("no <{section}> data array named '{name}'"),
+                None => format!("no <{section}> data array"),
+            };
+            Error::new(ErrorKind::Syntax, message).at_line(end)
+        })
+}
+
+/// A declared count (if any) must match the actual one.
+fn check_count(
+    declared: Option<i64>,
+    actual: usize,
+    key: &str,
+    what: &str,
+    line: usize,
+) -> Result<()> {
+    match declared {
+        Some(declared) if usize::try_from(declared).ok() != Some(actual) => Err(Error::new(
+            ErrorKind::CountMismatch,
+            format!("{key} is {declared}, but there are {actual} {what}"),
+        )
+        .at_line(line)),
+        _ => Ok(()),
+    }
+}
+
+/// The tokens of an array's text with their line numbers.
+fn array_tokens<'a>(array: &Array<'a>) -> impl Iterator<Item = (usize, &'a [u8])> {
+    let first = array.line;
+    text::raw_lines(array.content)
+        .flat_map(move |(i, line)| text::tokens(line).map(move |token| (first + i - 1, token)))
+}
+
+/// The values of an array as finite numbers.
+fn floats(array: &Array) -> Result<Vec<f64>> {
+    array_tokens(array)
+        .map(|(line, token)| text::parse_coordinate(token, line))
+        .collect()
+}
+
+/// The values of an array as integers, each with its line.
+fn ints(array: &Array) -> Result<Vec<(i64, usize)>> {
+    array_tokens(array)
+        .map(|(line, token)| Ok((text::parse_int(token, "value", line)?, line)))
+        .collect()
+}
+
+/// A position in the file and its line.
+struct Scanner<'a> {
+    data: &'a [u8],
+    position: usize,
+    line: usize,
+}
+
+impl<'a> Scanner<'a> {
+    /// Move to `position`, counting the line breaks passed.
+    fn advance_to(&mut self, position: usize) {
+        let passed = &self.data[self.position..position];
+        self.line += passed.iter().filter(|&&b| b == b'\n').count();
+        self.position = position;
+    }
+
+    /// The position of the next `pattern` at or after the current position.
+    fn find(&self, pattern: &[u8]) -> Option<usize> {
+        self.data[self.position..]
+            .windows(pattern.len())
+            .position(|w| w == pattern)
+            .map(|i| self.position + i)
+    }
+
+    /// Move past the next `pattern`, which must exist.
+    fn skip_past(&mut self, pattern: &[u8]) -> Result<()> {
+        let at = self.find(pattern).ok_or_else(|| {
+            Error::new(
+                ErrorKind::Truncated,
+                format!("file ends before {}", String::from_utf8_lossy(pattern)),
+            )
+            .at_line(self.line)
+        })?;
+        self.advance_to(at + pattern.len());
+        Ok(())
+    }
+
+    /// The next start or end tag; declarations and comments are skipped, text between
+    /// tags is ignored.
+    fn next_tag(&mut self) -> Result<Option<Tag<'a>>> {
+        loop {
+            let Some(at) = self.find(b"<") else {
+                self.advance_to(self.data.len());
+                return Ok(None);
+            };
+            self.advance_to(at);
+            let rest = &self.data[at..];
+            if rest.starts_with(b"<?") {
+                self.skip_past(b"?>")?;
+            } else if rest.starts_with(b"<!--") {
+                self.skip_past(b"-->")?;
+            } else if rest.starts_with(b"<!") {
+                self.skip_past(b">")?;
+            } else {
+                return self.tag().map(Some);
+            }
+        }
+    }
+
+    /// The tag starting at the current `<`.
+    fn tag(&mut self) -> Result<Tag<'a>> {
+        let data = self.data;
+        let line = self.line;
+        let truncated = || Error::new(ErrorKind::Truncated, "file ends inside a tag").at_line(line);
+        let syntax = |message: String| Error::new(ErrorKind::Syntax, message).at_line(line);
+        let skip_space = |i: &mut usize| {
+            while data.get(*i).is_some_and(u8::is_ascii_whitespace) {
+                *i += 1;
+            }
+        };
+        let take_name = |i: &mut usize| {
+            let start = *i;
+            while data
+                .get(*i)
+                .is_some_and(|&b| !b.is_ascii_whitespace() && !b"/>=".contains(&b))
+            {
+                *i += 1;
+            }
+            &data[start..*i]
+        };
+
+        let mut i = self.position + 1;
+        let closing = data.get(i) == Some(&b'/');
+        if closing {
+            i += 1;
+        }
+        let name = take_name(&mut i);
+        if name.is_empty() {
+            return Err(data
+                .get(i)
+                .map_or_else(truncated, |_| syntax("a tag without a name".to_string())));
+        }
+        let mut attributes = Vec::new();
+        let self_closing = loop {
+            skip_space(&mut i);
+            match data.get(i) {
+                None => return Err(truncated()),
+                Some(b'>') => {
+                    i += 1;
+                    break false;
+                }
+                Some(b'/') if !closing && data.get(i + 1) == Some(&b'>') => {
+                    i += 2;
+                    break true;
+                }
+                Some(_) if closing => {
+                    return Err(syntax(format!(
+                        "unexpected text in closing tag {}",
+                        text::shown(name)
+                    )))
+                }
+                Some(_) => {}
+            }
+            // An attribute: key = "value" (or 'value').
+            let key = take_name(&mut i);
+            skip_space(&mut i);
+            match data.get(i) {
+                None => return Err(truncated()),
+                Some(b'=') if !key.is_empty() => i += 1,
+                Some(_) => {
+                    return Err(syntax(format!(
+                        "expected an attribute 'name=\"value\"' in tag {}",
+                        text::shown(name)
+                    )))
+                }
+            }
+            skip_space(&mut i);
+            let quote = match data.get(i) {
+                None => return Err(truncated()),
+                Some(&quote) if quote == b'"' || quote == b'\'' => quote,
+                Some(_) => {
+                    return Err(syntax(format!(
+                        "attribute {} has an unquoted value",
+                        text::shown(key)
+                    )))
+                }
+            };
+            let value_start = i + 1;
+            let value_end = data[value_start..]
+                .iter()
+                .position(|&b| b == quote)
+                .map(|length| value_start + length)
+                .ok_or_else(truncated)?;
+            attributes.push((key, unescape(&data[value_start..value_end])));
+            i = value_end + 1;
+        };
+        self.advance_to(i);
+        Ok(Tag {
+            name,
+            attributes,
+            closing,
+            self_closing,
+            line,
+        })
+    }
+
+    /// The text of the `<DataArray>` just read, up to its end tag.
+    fn data_array(&mut self, tag: &Tag, section: &'a [u8]) -> Result<Array<'a>> {
+        match tag.attribute("format").unwrap_or("ascii") {
+            "ascii" => {}
+            format => {
+                return Err(Error::new(
+                    ErrorKind::Unsupported,
+                    format!(
+                        "data array format {} is not supported (ascii expected)",
+                        text::shown(format.as_bytes())
+                    ),
+                )
+                .at_line(tag.line))
+            }
+        }
+        let components = tag.int_attribute("NumberOfComponents")?.unwrap_or(1);
+        let (start, line) = (self.position, self.line);
+        let stop = self.find(b"<").ok_or_else(|| {
+            Error::new(ErrorKind::Truncated, "file ends inside a <DataArray>")
+                .at_line(text::last_line(self.data))
+        })?;
+        let end_tag = self.next_tag()?;
+        if !end_tag
+            .as_ref()
+            .is_some_and(|end| end.closing && end.name == b"DataArray")
+        {
+            return Err(Error::new(ErrorKind::Syntax, "expected </DataArray>").at_line(self.line));
+        }
+        Ok(Array {
+            section,
+            name: tag.attribute("Name").unwrap_or_default().to_string(),
+            components,
+            content: &self.data[start..stop],
+            line,
+        })
+    }
+}
+
+/// Replace the five predefined XML entities.
+fn unescape(value: &[u8]) -> String {
+    String::from_utf8_lossy(value)
+        .replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&quot;", "\"")
+        .replace("&apos;", "'")
+        .replace("&amp;", "&")
+}
+
+/// Escape text for an attribute value.
+fn escape(value: &str) -> String {
+    value
+        .replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&apos;")
+}
+
+/// Write a mesh with per-vertex fields (lengths checked by the caller) as VTU.
+pub(crate) fn write(mesh: &TetMesh, fields: &[(&str, &[f64])], out: &mut Vec<u8>) -> Result<()> {
+    for (i, (name, values)) in fields.iter().enumerate() {
+        if *name == "kind" || fields[..i].iter().any(|(other, _)| other == name) {
+            return Err(Error::invalid_argument(format!(
+                "field name '{name}' is taken ('kind' is the vertex kinds; names must differ)"
+            )));
+        }
+        if let Some(v) = values.iter().position(|x| !x.is_finite()) {
+            return Err(Error::new(
+                ErrorKind::NonFinite,
+                format!("field '{name}' has a non-finite value at vertex {v}"),
+            ));
+        }
+    }
+    // Writing into a Vec<u8> cannot fail, so the io::Results below are always Ok.
+    let (n, t) = (mesh.positions.len(), mesh.tets.len());
+    let _ = writeln!(out, "<?xml version=\"1.0\"?>");
+    let _ = writeln!(
+        out,
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">"
+    );
+    let _ = writeln!(out, "  <UnstructuredGrid>");
+    let _ = writeln!(
+        out,
+        "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{t}\">"
+    );
+    let _ = writeln!(out, "      <PointData Scalars=\"kind\">");
+    let _ = writeln!(
+        out,
+        "        <DataArray type=\"Int32\" Name=\"kind\" format=\"ascii\">"
+    );
+    for &kind in &mesh.kinds {
+        let _ = writeln!(out, "{}", super::kind_code(kind));
+    }
+    let _ = writeln!(out, "        </DataArray>");
+    for (name, values) in fields {
+        let _ = writeln!(
+            out,
+            "        <DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">",
+            escape(name)
+        );
+        for value in *values {
+            let _ = writeln!(out, "{value}");
+        }
+        let _ = writeln!(out, "        </DataArray>");
+    }
+    let _ = writeln!(out, "      </PointData>");
+    let _ = writeln!(out, "      <Points>");
+    let _ = writeln!(
+        out,
+        "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">"
+    );
+    for [x, y, z] in &mesh.positions {
+        let _ = writeln!(out, "{x} {y} {z}");
+    }
+    let _ = writeln!(out, "        </DataArray>");
+    let _ = writeln!(out, "      </Points>");
+    let _ = writeln!(out, "      <Cells>");
+    let _ = writeln!(
+        out,
+        "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+    );
+    for [a, b, c, d] in &mesh.tets {
+        let _ = writeln!(out, "{a} {b} {c} {d}");
+    }
+    let _ = writeln!(out, "        </DataArray>");
+    let _ = writeln!(
+        out,
+        "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">"
+    );
+    for i in 1..=t {
+        let _ = writeln!(out, "{}", 4 * i);
+    }
+    let _ = writeln!(out, "        </DataArray>");
+    let _ = writeln!(
+        out,
+        "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">"
+    );
+    for _ in 0..t {
+        let _ = writeln!(out, "{VTK_TETRA}");
+    }
+    let _ = writeln!(out, "        </DataArray>");
+    let _ = writeln!(out, "      </Cells>");
+    let _ = writeln!(out, "    </Piece>");
+    let _ = writeln!(out, "  </UnstructuredGrid>");
+    let _ = writeln!(out, "</VTKFile>");
+    Ok(())
+}
