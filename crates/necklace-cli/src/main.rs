@@ -11,6 +11,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use necklace::pipeline::{self, Side, VolumeOptions};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::{io, MeshReport};
 
@@ -32,6 +33,24 @@ enum Command {
     Info {
         /// The mesh file.
         mesh: PathBuf,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Mesh the volume inside a surface (or, with --exterior, the shell between it and a
+    /// bounding sphere) into tetrahedra.
+    Volume {
+        /// The closed surface mesh.
+        mesh: PathBuf,
+        /// Mesh the outside shell instead of the inside.
+        #[arg(long)]
+        exterior: bool,
+        /// Lattice spacing along the surface (default: bounding-box diagonal / 64).
+        #[arg(long)]
+        h: Option<f64>,
+        /// Output tet mesh (.vtu, .mesh, .node or .msh).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
@@ -88,6 +107,13 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<String> {
     match cli.command {
         Command::Info { mesh, json } => info(mesh, json),
+        Command::Volume {
+            mesh,
+            exterior,
+            h,
+            output,
+            json,
+        } => volume(mesh, exterior, h, output, json),
         Command::Shape {
             name,
             params,
@@ -111,6 +137,64 @@ fn info(path: PathBuf, json: bool) -> Result<String> {
     } else {
         Ok(format!("{}\n{report}\n", path.display()))
     }
+}
+
+fn volume(
+    path: PathBuf,
+    exterior: bool,
+    h: Option<f64>,
+    output: Option<PathBuf>,
+    json: bool,
+) -> Result<String> {
+    let surface = pipeline::load_surface(&path)?;
+    let side = if exterior {
+        Side::Outside
+    } else {
+        Side::Inside
+    };
+    let options = VolumeOptions {
+        h,
+        ..VolumeOptions::default()
+    };
+    let result = pipeline::volume_mesh(&surface.mesh, side, &options)?;
+    if let Some(output) = &output {
+        io::write_tet_mesh(output, &result.mesh, &[])?;
+    }
+    let report = result.report();
+    if json {
+        return Ok(serde_json::to_string_pretty(&report)? + "\n");
+    }
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{} ({:?}): {} vertices ({} interior, {} surface, {} outer), {} tets",
+        path.display(),
+        report.side,
+        report.vertices,
+        report.interior_vertices,
+        report.surface_vertices,
+        report.outer_vertices,
+        report.tets
+    );
+    let _ = writeln!(
+        out,
+        "chi(volume) {}  chi(boundary) {}  dihedral {:.1}..{:.1} deg  hausdorff {:.2e} diag",
+        report.euler_volume,
+        report.euler_boundary,
+        report.min_dihedral_deg,
+        report.max_dihedral_deg,
+        report.hausdorff_to_surface
+    );
+    let _ = writeln!(
+        out,
+        "h {:.4e}  finest cell {:.4e}  volume {:.6e}  {:.2} s{}",
+        report.h,
+        report.finest_cell,
+        report.volume,
+        report.seconds,
+        output.map_or(String::new(), |o| format!("  -> {}", o.display()))
+    );
+    Ok(out)
 }
 
 fn shape(name: &str, params: &[(String, f64)], output: PathBuf) -> Result<String> {

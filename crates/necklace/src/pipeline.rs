@@ -3,15 +3,26 @@
 //! The method (see `ARCHITECTURE.md`) runs: input surface → volume mesh → distance field
 //! and smoothing → critical points → neck loops. Each stage is a module that takes plain
 //! data and returns plain data; only this module calls one stage with another's output.
-//! Today it holds the first step, shared by every later one: [`prepare_surface`] checks
-//! that a mesh is a closed, manifold, consistently oriented surface (what the volume
-//! stages need) and turns an inward-oriented one outward, saying so.
+//! Steps so far:
+//! - [`prepare_surface`] checks that a mesh is a closed, manifold, consistently oriented
+//!   surface and turns an inward-oriented one outward, saying so;
+//! - [`volume_mesh`] builds the tet mesh of the inside ([`Side::Inside`]) or of the shell
+//!   between the surface and a bounding sphere ([`Side::Outside`]): it wraps the surface's
+//!   signed distance (`distance`) as a `volume::Domain`, with thin-part sizing from ray
+//!   casts, and calls the stuffing mesher (`volume`).
 
 use std::path::Path;
+use std::time::Instant;
 
+use serde::Serialize;
+
+use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
+use crate::geom::{add, norm, scale, sub};
 use crate::io;
 use crate::mesh::{MeshReport, SurfaceMesh};
+use crate::tet::{TetMesh, VertexKind};
+use crate::volume::{self, Domain, StuffingOptions, StuffingStats};
 
 /// A surface accepted as input to the method, with the report it was checked against.
 #[derive(Debug, Clone)]
@@ -55,6 +66,334 @@ pub fn load_surface(path: impl AsRef<Path>) -> Result<PreparedSurface> {
     let path = path.as_ref();
     let mesh = io::read_mesh(path)?;
     prepare_surface(mesh).map_err(|e| e.in_file(path))
+}
+
+/// Which volume to mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    /// The solid bounded by the surface: handles.
+    Inside,
+    /// The shell between the surface and a bounding sphere: tunnels.
+    Outside,
+}
+
+/// Options of [`volume_mesh`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VolumeOptions {
+    /// Lattice spacing along the surface, in the surface's units. `None` (default):
+    /// [`default_h`].
+    pub h: Option<f64>,
+    /// Outer sphere radius as a multiple of the bounding box's half diagonal (default
+    /// 1.5), centred at the box centre.
+    pub sphere_scale: f64,
+    /// How many halvings below `h` thin parts may ask for (default 3: `h/8`).
+    pub refine_levels: u32,
+}
+
+impl Default for VolumeOptions {
+    fn default() -> Self {
+        VolumeOptions {
+            h: None,
+            sphere_scale: 1.5,
+            refine_levels: 3,
+        }
+    }
+}
+
+/// A volume mesh of one side of a surface, with what describes it.
+#[derive(Debug, Clone)]
+pub struct VolumeResult {
+    /// The tet mesh (vertex kinds: interior, surface, outer sphere).
+    pub mesh: TetMesh,
+    /// Which side.
+    pub side: Side,
+    /// The spacing used.
+    pub h: f64,
+    /// Centre and radius of the outer sphere (outside only).
+    pub sphere: Option<([f64; 3], f64)>,
+    /// The mesher's counts.
+    pub stats: StuffingStats,
+    /// Sizing points asked for by thin parts.
+    pub thin_points: usize,
+    /// Largest distance of a surface-kind vertex to the input surface, divided by the
+    /// bounding-box diagonal.
+    pub hausdorff_to_surface: f64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// The default spacing: 1/64 of the bounding-box diagonal. Parts thinner than about
+/// `2h` are refined locally (see [`VolumeOptions::refine_levels`]), so the rule needs
+/// no knowledge of the thinnest part.
+pub fn default_h(surface: &SurfaceMesh) -> f64 {
+    surface.bbox_diagonal() / 64.0
+}
+
+/// The summary of a volume mesh that `necklace volume --json` prints.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VolumeReport {
+    /// Which side was meshed.
+    pub side: Side,
+    /// Vertex count.
+    pub vertices: usize,
+    /// Tet count.
+    pub tets: usize,
+    /// Vertices strictly inside the region.
+    pub interior_vertices: usize,
+    /// Vertices on the input surface.
+    pub surface_vertices: usize,
+    /// Vertices on the outer sphere.
+    pub outer_vertices: usize,
+    /// χ of the tet mesh (V − E + F − T).
+    pub euler_volume: i64,
+    /// χ of its boundary surface (twice `euler_volume` for a 3-manifold with boundary).
+    pub euler_boundary: i64,
+    /// Smallest dihedral angle, degrees.
+    pub min_dihedral_deg: f64,
+    /// Largest dihedral angle, degrees.
+    pub max_dihedral_deg: f64,
+    /// Largest distance of a surface vertex to the input surface / bbox diagonal.
+    pub hausdorff_to_surface: f64,
+    /// Sum of tet volumes.
+    pub volume: f64,
+    /// Lattice spacing along the surface.
+    pub h: f64,
+    /// Smallest cell used (thin parts).
+    pub finest_cell: f64,
+    /// Sizing points from thin parts.
+    pub thin_points: usize,
+    /// Tets inverted by warping (0 when all is well).
+    pub inverted_tets: usize,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+impl VolumeResult {
+    /// Counts, invariants and quality of the mesh.
+    pub fn report(&self) -> VolumeReport {
+        let m = &self.mesh;
+        let (interior, surface, outer) = m.kind_counts();
+        let (min_dihedral, max_dihedral) = m.dihedral_range_deg().unwrap_or((0.0, 0.0));
+        let boundary = SurfaceMesh {
+            positions: m.positions.clone(),
+            triangles: m.boundary_faces(),
+        };
+        let euler_boundary = MeshReport::new(&boundary)
+            .component_details
+            .iter()
+            .map(|c| c.euler)
+            .sum();
+        VolumeReport {
+            side: self.side,
+            vertices: m.num_vertices(),
+            tets: m.num_tets(),
+            interior_vertices: interior,
+            surface_vertices: surface,
+            outer_vertices: outer,
+            euler_volume: m.euler_characteristic(),
+            euler_boundary,
+            min_dihedral_deg: min_dihedral,
+            max_dihedral_deg: max_dihedral,
+            hausdorff_to_surface: self.hausdorff_to_surface,
+            volume: m.volume(),
+            h: self.h,
+            finest_cell: self.stats.finest_cell,
+            thin_points: self.thin_points,
+            inverted_tets: self.stats.inverted_tets,
+            seconds: self.seconds,
+        }
+    }
+}
+
+/// Mesh one side of a closed, outward-oriented surface (see [`prepare_surface`]).
+pub fn volume_mesh(
+    surface: &SurfaceMesh,
+    side: Side,
+    options: &VolumeOptions,
+) -> Result<VolumeResult> {
+    let start = Instant::now();
+    let (lo, hi) = surface
+        .bounding_box()
+        .ok_or_else(|| Error::new(ErrorKind::InvalidMesh, "the surface has no vertices"))?;
+    if surface.triangles.is_empty() {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            "the surface has no triangles",
+        ));
+    }
+    let diagonal = norm(sub(hi, lo));
+    if diagonal.is_nan() || diagonal <= 0.0 {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            "the surface is a single point",
+        ));
+    }
+    let h = options.h.unwrap_or_else(|| default_h(surface));
+    if !(h.is_finite() && h > 0.0) {
+        return Err(Error::invalid_argument(format!("h = {h} must be positive")));
+    }
+    if !(options.sphere_scale > 1.0 && options.sphere_scale.is_finite()) {
+        return Err(Error::invalid_argument(format!(
+            "sphere_scale = {} must exceed 1 (the sphere must enclose the surface)",
+            options.sphere_scale
+        )));
+    }
+
+    let distance = SurfaceDistance::new(surface);
+    let centre = scale(add(lo, hi), 0.5);
+    let radius = options.sphere_scale * 0.5 * diagonal;
+    let sizing = thin_part_sizing(surface, &distance, h);
+    let thin_points = sizing.len();
+    let domain = SurfaceDomain {
+        distance: &distance,
+        side,
+        centre,
+        radius,
+        bounds: (lo, hi),
+        sizing,
+    };
+    let stuffing = StuffingOptions {
+        h,
+        refine_levels: options.refine_levels,
+    };
+    let stuffed = volume::stuff_volume(&domain, &stuffing)?;
+
+    let surface_vertices: Vec<[f64; 3]> = stuffed
+        .mesh
+        .positions
+        .iter()
+        .zip(&stuffed.mesh.kinds)
+        .filter(|(_, k)| **k == VertexKind::Surface)
+        .map(|(p, _)| *p)
+        .collect();
+    let hausdorff = distance
+        .distances(&surface_vertices)
+        .into_iter()
+        .fold(0.0, f64::max)
+        / diagonal;
+
+    Ok(VolumeResult {
+        mesh: stuffed.mesh,
+        side,
+        h,
+        sphere: (side == Side::Outside).then_some((centre, radius)),
+        stats: stuffed.stats,
+        thin_points,
+        hausdorff_to_surface: hausdorff,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// One side of a surface as an implicit domain for the stuffing mesher.
+struct SurfaceDomain<'a> {
+    distance: &'a SurfaceDistance,
+    side: Side,
+    centre: [f64; 3],
+    radius: f64,
+    bounds: ([f64; 3], [f64; 3]),
+    sizing: Vec<([f64; 3], f64)>,
+}
+
+impl SurfaceDomain<'_> {
+    fn sphere_value(&self, p: [f64; 3]) -> f64 {
+        norm(sub(p, self.centre)) - self.radius
+    }
+
+    fn combine(&self, p: [f64; 3], signed: f64) -> f64 {
+        match self.side {
+            Side::Inside => signed,
+            Side::Outside => (-signed).max(self.sphere_value(p)),
+        }
+    }
+}
+
+impl Domain for SurfaceDomain<'_> {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        self.combine(p, self.distance.signed_distance(p))
+    }
+
+    fn values(&self, points: &[[f64; 3]]) -> Vec<f64> {
+        let signed = self.distance.signed_distances(points);
+        points
+            .iter()
+            .zip(signed)
+            .map(|(&p, s)| self.combine(p, s))
+            .collect()
+    }
+
+    fn boundary_kind(&self, p: [f64; 3]) -> VertexKind {
+        match self.side {
+            Side::Inside => VertexKind::Surface,
+            Side::Outside => {
+                if self.sphere_value(p).abs() < self.distance.distance(p) {
+                    VertexKind::Outer
+                } else {
+                    VertexKind::Surface
+                }
+            }
+        }
+    }
+
+    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        match self.side {
+            Side::Inside => self.bounds,
+            Side::Outside => (
+                self.centre.map(|c| c - self.radius),
+                self.centre.map(|c| c + self.radius),
+            ),
+        }
+    }
+
+    fn sizing(&self) -> Vec<([f64; 3], f64)> {
+        self.sizing.clone()
+    }
+
+    fn spacing_near(&self, p: [f64; 3], h: f64) -> f64 {
+        // The outer sphere is only a container: an eighth of its radius is detail enough.
+        if self.side == Side::Outside && self.sphere_value(p).abs() < self.distance.distance(p) {
+            (self.radius / 8.0).max(h)
+        } else {
+            h
+        }
+    }
+}
+
+/// Where the solid or a gap between parts of the surface is thinner than `2h`, ask for
+/// spacing ≤ thickness / 2 so that at least one lattice vertex stays strictly inside
+/// after warping. Thickness at a surface vertex: the distance along the inward and the
+/// outward vertex normal to the next surface hit.
+fn thin_part_sizing(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    h: f64,
+) -> Vec<([f64; 3], f64)> {
+    let mut normals = vec![[0.0; 3]; surface.num_vertices()];
+    for f in 0..surface.num_triangles() {
+        let n = surface.face_normal_scaled(f);
+        for &v in &surface.triangles[f] {
+            normals[v as usize] = add(normals[v as usize], n);
+        }
+    }
+    // Both sides matter whichever side is meshed: a thin solid part is lost from the
+    // shell just as a thin gap is lost from the solid.
+    let mut out = Vec::new();
+    for (v, &p) in surface.positions.iter().enumerate() {
+        let len = norm(normals[v]);
+        if len.is_nan() || len <= 0.0 {
+            continue;
+        }
+        for direction in [-1.0, 1.0] {
+            let d = scale(normals[v], direction / len);
+            let origin = add(p, scale(d, 1e-6 * h));
+            if let Some((t, _)) = distance.ray_hit(origin, d, 2.0 * h) {
+                let spacing = 0.5 * t;
+                out.push((p, spacing));
+                out.push((add(p, scale(d, 0.5 * t)), spacing));
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -17,6 +17,8 @@
 //! 3. `stuffing`: domain values at the lattice vertices, cut points on sign-changing
 //!    edges, warping of vertices too close to a cut point, and the stencils that fill
 //!    each background tet with its inside part.
+//! 4. `repair`: pinches below the lattice resolution (tets touching along an edge or at
+//!    a vertex only) are undone by dropping the smaller side, and reported.
 //!
 //! Conventions: lengths in the domain's units; output tets positively oriented; vertex
 //! kinds from the sign (inside: interior) and [`Domain::boundary_kind`] (on the zero
@@ -24,6 +26,7 @@
 
 mod background;
 mod octree;
+mod repair;
 mod stuffing;
 
 use serde::Serialize;
@@ -99,6 +102,11 @@ pub struct StuffingStats {
     pub cut_points: usize,
     /// Output tets that warping made non-positive (0 unless the guarantees fail).
     pub inverted_tets: usize,
+    /// Tets dropped to undo pinches below the lattice resolution.
+    pub pinch_tets_removed: usize,
+    /// Interior vertices those drops left on the boundary (now boundary vertices,
+    /// slightly inside the true surface).
+    pub exposed_vertices: usize,
 }
 
 /// A stuffed volume mesh and its statistics.
@@ -210,7 +218,14 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         (0..3).filter(|&k| ka[k] != kb[k]).count() == 1
     };
     let value = |p: [f64; 3]| domain.value(p);
-    let stuffed = stuffing::stuff(&value, positions, &values, &axis_parallel, &background.tets);
+    let mut stuffed = stuffing::stuff(&value, positions, &values, &axis_parallel, &background.tets);
+
+    // 4. Pinches below the lattice resolution.
+    let mut interior: Vec<bool> = stuffed.signs.iter().map(|&s| s < 0).collect();
+    let repair = repair::repair_pinches(&stuffed.positions, &mut stuffed.tets, &interior);
+    for &v in &repair.exposed {
+        interior[v as usize] = false;
+    }
 
     // Keep the vertices the tets use, in index order.
     let mut new_id = vec![u32::MAX; stuffed.positions.len()];
@@ -226,7 +241,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             *id = out_positions.len() as u32;
             let p = stuffed.positions[v];
             out_positions.push(p);
-            kinds.push(if stuffed.signs[v] < 0 {
+            kinds.push(if interior[v] {
                 VertexKind::Interior
             } else {
                 domain.boundary_kind(p)
@@ -251,6 +266,8 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             warped_vertices: stuffed.warped,
             cut_points: stuffed.cut_points,
             inverted_tets: stuffed.inverted,
+            pinch_tets_removed: repair.removed_tets,
+            exposed_vertices: repair.exposed.len(),
         },
     })
 }

@@ -8,8 +8,8 @@
 //! *violates* that end; each violated vertex is *warped* onto its closest violating cut
 //! point and becomes `0`, which removes the cut points of its edges (α_long for
 //! axis-parallel edges, α_short for the others). Then each background tet is filled:
-//! - no `−` vertex: nothing (a tet whose four vertices are all `0` is kept when the
-//!   domain is negative at its centroid);
+//! - no `−` vertex: nothing (also when all four are `0`: such a tet lies along the
+//!   boundary, and keeping it makes edges shared by unconnected tets);
 //! - no `+` vertex: the tet itself;
 //! - one `−`: one tet, with `+` vertices replaced by their cut points;
 //! - two `−`, one `0`, one `+`: a pyramid, two tets;
@@ -28,6 +28,9 @@ use crate::geom::{cross, dot, lerp, norm, sub};
 /// dihedral angles between 10.7° and 164.8°).
 pub(crate) const ALPHA_LONG: f64 = 0.24999;
 pub(crate) const ALPHA_SHORT: f64 = 0.41189;
+/// A warp may shrink no background tet around the warped vertex below this fraction of
+/// its lattice volume.
+const WARP_GUARD: f64 = 0.1;
 /// Secant/bisection steps when locating a cut point on an edge.
 const ROOT_STEPS: usize = 30;
 
@@ -90,10 +93,26 @@ pub(crate) fn stuff(
         incident[a as usize].push(e as u32);
         incident[b as usize].push(e as u32);
     }
+    // Background tets around each vertex, to check that a warp keeps them positive.
+    let mut vertex_tets: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for (t, tet) in tets.iter().enumerate() {
+        for &v in tet {
+            vertex_tets[v as usize].push(t as u32);
+        }
+    }
+    let volume6 = |p: &[[f64; 3]], t: &[u32; 4], moved: Option<(u32, [f64; 3])>| {
+        let at = |v: u32| match moved {
+            Some((m, q)) if m == v => q,
+            _ => p[v as usize],
+        };
+        let [a, b, c, d] = t.map(at);
+        dot(sub(b, a), cross(sub(c, a), sub(d, a)))
+    };
     let mut warped = 0;
+    let mut candidates: Vec<(f64, usize)> = Vec::new();
     for v in 0..n {
-        // The closest violating cut point that is still alive.
-        let mut choice: Option<(f64, usize)> = None;
+        // Violating cut points that are still alive, closest first.
+        candidates.clear();
         for &e in &incident[v] {
             let e = e as usize;
             if !alive[e] {
@@ -112,14 +131,25 @@ pub(crate) fn stuff(
             };
             if t < alpha {
                 let len = norm(sub(positions[b as usize], positions[a as usize]));
-                if choice.is_none_or(|(d, _)| t * len < d) {
-                    choice = Some((t * len, e));
-                }
+                candidates.push((t * len, e));
             }
         }
-        if let Some((_, e)) = choice {
+        candidates.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        // Guard: the paper's bounds hold for BCC tets; in graded transitions a warp
+        // could flatten a cone tet, so a warp must keep every background tet around v
+        // at a fair fraction of its volume (otherwise the next candidate, or none).
+        let choice = candidates.iter().find_map(|&(_, e)| {
             let [a, b] = edges[e];
-            positions[v] = lerp(positions[a as usize], positions[b as usize], params[e]);
+            let q = lerp(positions[a as usize], positions[b as usize], params[e]);
+            let safe = vertex_tets[v].iter().all(|&t| {
+                let tet = &tets[t as usize];
+                volume6(&positions, tet, Some((v as u32, q)))
+                    >= WARP_GUARD * volume6(&lattice_positions, tet, None)
+            });
+            safe.then_some((e, q))
+        });
+        if let Some((_, q)) = choice {
+            positions[v] = q;
             signs[v] = 0;
             warped += 1;
             for &e in &incident[v] {
@@ -156,17 +186,6 @@ pub(crate) fn stuff(
         let zero: Vec<u32> = (0..4).filter(|&i| s[i] == 0).map(|i| t[i]).collect();
         let pos: Vec<u32> = (0..4).filter(|&i| s[i] > 0).map(|i| t[i]).collect();
         match (neg.len(), zero.len(), pos.len()) {
-            (0, 4, 0) => {
-                let c = t
-                    .iter()
-                    .map(|&v| out_positions[v as usize])
-                    .fold([0.0; 3], |acc, p| {
-                        [acc[0] + p[0], acc[1] + p[1], acc[2] + p[2]]
-                    });
-                if value([c[0] / 4.0, c[1] / 4.0, c[2] / 4.0]) < 0.0 {
-                    out.push(*t);
-                }
-            }
             (0, _, _) => {}
             (_, _, 0) => out.push(*t),
             (1, _, _) => {
@@ -213,16 +232,12 @@ pub(crate) fn stuff(
     }
     // Orient every output tet by its shape before warping (never degenerate: cut
     // points lie strictly inside their edges), then count any that warping inverted.
-    let volume6 = |p: &[[f64; 3]], t: &[u32; 4]| {
-        let [a, b, c, d] = t.map(|v| p[v as usize]);
-        dot(sub(b, a), cross(sub(c, a), sub(d, a)))
-    };
     let mut inverted = 0;
     for t in &mut out {
-        if volume6(&lattice_positions, t) < 0.0 {
+        if volume6(&lattice_positions, t, None) < 0.0 {
             t.swap(2, 3);
         }
-        if volume6(&out_positions, t) <= 0.0 {
+        if volume6(&out_positions, t, None) <= 0.0 {
             inverted += 1;
         }
     }
