@@ -11,7 +11,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use necklace::pipeline::{self, Side, VolumeOptions};
+use necklace::pipeline::{self, Mesher, Side, VolumeOptions};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::{io, MeshReport};
 
@@ -48,6 +48,10 @@ enum Command {
         /// Lattice spacing along the surface (default: bounding-box diagonal / 64).
         #[arg(long)]
         h: Option<f64>,
+        /// The volume mesher: necklace's isosurface stuffing, or TetGen "pq1.2" (needs a
+        /// build with --features tetgen, which is AGPL-3.0).
+        #[arg(long, value_enum, default_value = "stuffing")]
+        mesher: MesherArg,
         /// Output tet mesh (.vtu, .mesh, .node or .msh).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -70,6 +74,12 @@ enum Command {
         #[arg(long)]
         list: bool,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum MesherArg {
+    Stuffing,
+    Tetgen,
 }
 
 fn parse_param(s: &str) -> std::result::Result<(String, f64), String> {
@@ -111,9 +121,20 @@ fn run(cli: Cli) -> Result<String> {
             mesh,
             exterior,
             h,
+            mesher,
             output,
             json,
-        } => volume(mesh, exterior, h, output, json),
+        } => {
+            let options = VolumeOptions {
+                h,
+                mesher: match mesher {
+                    MesherArg::Stuffing => Mesher::Stuffing,
+                    MesherArg::Tetgen => Mesher::Tetgen,
+                },
+                ..VolumeOptions::default()
+            };
+            volume(mesh, exterior, &options, output, json)
+        }
         Command::Shape {
             name,
             params,
@@ -142,21 +163,28 @@ fn info(path: PathBuf, json: bool) -> Result<String> {
 fn volume(
     path: PathBuf,
     exterior: bool,
-    h: Option<f64>,
+    options: &VolumeOptions,
     output: Option<PathBuf>,
     json: bool,
 ) -> Result<String> {
-    let surface = pipeline::load_surface(&path)?;
+    let (surface, surface_report, flipped) = pipeline::orient_for_volume(io::read_mesh(&path)?);
+    // The mesher follows the winding number, so open or self-intersecting input is
+    // meshed as the solid it bounds; say what is unusual about it.
+    for problem in surface_report.problems() {
+        eprintln!("necklace: warning: {}: {problem}", path.display());
+    }
+    if flipped {
+        eprintln!(
+            "necklace: note: {}: faces flipped to point outward",
+            path.display()
+        );
+    }
     let side = if exterior {
         Side::Outside
     } else {
         Side::Inside
     };
-    let options = VolumeOptions {
-        h,
-        ..VolumeOptions::default()
-    };
-    let result = pipeline::volume_mesh(&surface.mesh, side, &options)?;
+    let result = pipeline::volume_mesh(&surface, side, options)?;
     if let Some(output) = &output {
         io::write_tet_mesh(output, &result.mesh, &[])?;
     }

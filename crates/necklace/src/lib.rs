@@ -23,6 +23,8 @@ pub mod mesh;
 pub mod pipeline;
 pub mod shapes;
 pub mod tet;
+#[cfg(feature = "tetgen")]
+pub mod tetgen;
 pub mod volume;
 
 pub use error::{Error, ErrorKind, Location, Result};

@@ -61,6 +61,19 @@ pub fn prepare_surface(mut mesh: SurfaceMesh) -> Result<PreparedSurface> {
     })
 }
 
+/// Orient a surface for volume meshing without requiring it to be closed: faces are
+/// flipped when the signed volume is negative (an open or self-intersecting mesh is
+/// still meshed as the solid its winding number describes). Returns the report of the
+/// mesh as given and whether it was flipped.
+pub fn orient_for_volume(mut mesh: SurfaceMesh) -> (SurfaceMesh, MeshReport, bool) {
+    let report = MeshReport::new(&mesh);
+    let flipped = report.signed_volume < 0.0;
+    if flipped {
+        mesh.flip_orientation();
+    }
+    (mesh, report, flipped)
+}
+
 /// Read a mesh file and [`prepare_surface`] it; errors name the file.
 pub fn load_surface(path: impl AsRef<Path>) -> Result<PreparedSurface> {
     let path = path.as_ref();
@@ -78,9 +91,22 @@ pub enum Side {
     Outside,
 }
 
+/// Which volume mesher to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mesher {
+    /// necklace's isosurface stuffing (default).
+    Stuffing,
+    /// TetGen with the paper's switches "pq1.2"; needs the `tetgen` cargo feature
+    /// (AGPL-3.0).
+    Tetgen,
+}
+
 /// Options of [`volume_mesh`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VolumeOptions {
+    /// The mesher (default [`Mesher::Stuffing`]).
+    pub mesher: Mesher,
     /// Lattice spacing along the surface, in the surface's units. `None` (default):
     /// [`default_h`].
     pub h: Option<f64>,
@@ -94,6 +120,7 @@ pub struct VolumeOptions {
 impl Default for VolumeOptions {
     fn default() -> Self {
         VolumeOptions {
+            mesher: Mesher::Stuffing,
             h: None,
             sphere_scale: 1.5,
             refine_levels: 3,
@@ -112,10 +139,15 @@ pub struct VolumeResult {
     pub h: f64,
     /// Centre and radius of the outer sphere (outside only).
     pub sphere: Option<([f64; 3], f64)>,
-    /// The mesher's counts.
-    pub stats: StuffingStats,
+    /// The mesher used.
+    pub mesher: Mesher,
+    /// The stuffing mesher's counts (`None` for TetGen).
+    pub stats: Option<StuffingStats>,
     /// Sizing points asked for by thin parts.
     pub thin_points: usize,
+    /// Outside only: enclosed pockets (components touching no outer-sphere vertex,
+    /// gaps below the resolution) that were dropped.
+    pub dropped_pockets: usize,
     /// Largest distance of a surface-kind vertex to the input surface, divided by the
     /// bounding-box diagonal.
     pub hausdorff_to_surface: f64,
@@ -157,14 +189,22 @@ pub struct VolumeReport {
     pub hausdorff_to_surface: f64,
     /// Sum of tet volumes.
     pub volume: f64,
-    /// Lattice spacing along the surface.
+    /// The mesher used.
+    pub mesher: Mesher,
+    /// Lattice spacing along the surface (stuffing).
     pub h: f64,
-    /// Smallest cell used (thin parts).
+    /// Smallest cell used (thin parts; stuffing).
     pub finest_cell: f64,
     /// Sizing points from thin parts.
     pub thin_points: usize,
     /// Tets inverted by warping (0 when all is well).
     pub inverted_tets: usize,
+    /// Tets dropped to undo sub-resolution pinches.
+    pub pinch_tets_removed: usize,
+    /// Enclosed pockets dropped from a shell.
+    pub dropped_pockets: usize,
+    /// Connected components of the tet mesh.
+    pub components: usize,
     /// Wall-clock seconds.
     pub seconds: f64,
 }
@@ -197,10 +237,14 @@ impl VolumeResult {
             max_dihedral_deg: max_dihedral,
             hausdorff_to_surface: self.hausdorff_to_surface,
             volume: m.volume(),
+            mesher: self.mesher,
             h: self.h,
-            finest_cell: self.stats.finest_cell,
+            finest_cell: self.stats.map_or(0.0, |s| s.finest_cell),
             thin_points: self.thin_points,
-            inverted_tets: self.stats.inverted_tets,
+            inverted_tets: self.stats.map_or(0, |s| s.inverted_tets),
+            pinch_tets_removed: self.stats.map_or(0, |s| s.pinch_tets_removed),
+            dropped_pockets: self.dropped_pockets,
+            components: m.tet_components().1,
             seconds: self.seconds,
         }
     }
@@ -243,27 +287,55 @@ pub fn volume_mesh(
     let distance = SurfaceDistance::new(surface);
     let centre = scale(add(lo, hi), 0.5);
     let radius = options.sphere_scale * 0.5 * diagonal;
-    let sizing = thin_part_sizing(surface, &distance, h);
-    let thin_points = sizing.len();
-    let domain = SurfaceDomain {
-        distance: &distance,
-        side,
-        centre,
-        radius,
-        bounds: (lo, hi),
-        sizing,
+    let (mut mesh, stats, thin_points) = match options.mesher {
+        Mesher::Stuffing => {
+            let sizing = thin_part_sizing(surface, &distance, h);
+            let thin_points = sizing.len();
+            let domain = SurfaceDomain {
+                distance: &distance,
+                side,
+                centre,
+                radius,
+                bounds: (lo, hi),
+                sizing,
+            };
+            let stuffing = StuffingOptions {
+                h,
+                refine_levels: options.refine_levels,
+            };
+            let stuffed = volume::stuff_volume(&domain, &stuffing)?;
+            (stuffed.mesh, Some(stuffed.stats), thin_points)
+        }
+        Mesher::Tetgen => (tetgen_mesh(surface, side, centre, radius)?, None, 0),
     };
-    let stuffing = StuffingOptions {
-        h,
-        refine_levels: options.refine_levels,
-    };
-    let stuffed = volume::stuff_volume(&domain, &stuffing)?;
+    // The shell around a connected surface is connected; pockets that touch no outer
+    // vertex are gaps below the lattice resolution, dropped and counted.
+    let mut dropped_pockets = 0;
+    if side == Side::Outside {
+        let (component, count) = mesh.tet_components();
+        if count > 1 {
+            let mut reaches_outer = vec![false; count];
+            for (t, tet) in mesh.tets.iter().enumerate() {
+                if tet
+                    .iter()
+                    .any(|&v| mesh.kinds[v as usize] == VertexKind::Outer)
+                {
+                    reaches_outer[component[t] as usize] = true;
+                }
+            }
+            dropped_pockets = reaches_outer.iter().filter(|&&r| !r).count();
+            let keep: Vec<bool> = component
+                .iter()
+                .map(|&c| reaches_outer[c as usize])
+                .collect();
+            mesh = mesh.retain_tets(&keep);
+        }
+    }
 
-    let surface_vertices: Vec<[f64; 3]> = stuffed
-        .mesh
+    let surface_vertices: Vec<[f64; 3]> = mesh
         .positions
         .iter()
-        .zip(&stuffed.mesh.kinds)
+        .zip(&mesh.kinds)
         .filter(|(_, k)| **k == VertexKind::Surface)
         .map(|(p, _)| *p)
         .collect();
@@ -274,15 +346,37 @@ pub fn volume_mesh(
         / diagonal;
 
     Ok(VolumeResult {
-        mesh: stuffed.mesh,
+        mesh,
         side,
         h,
         sphere: (side == Side::Outside).then_some((centre, radius)),
-        stats: stuffed.stats,
+        mesher: options.mesher,
+        stats,
         thin_points,
+        dropped_pockets,
         hausdorff_to_surface: hausdorff,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(feature = "tetgen")]
+fn tetgen_mesh(
+    surface: &SurfaceMesh,
+    side: Side,
+    centre: [f64; 3],
+    radius: f64,
+) -> Result<TetMesh> {
+    match side {
+        Side::Inside => crate::tetgen::mesh_inside(surface),
+        Side::Outside => crate::tetgen::mesh_shell(surface, centre, radius),
+    }
+}
+
+#[cfg(not(feature = "tetgen"))]
+fn tetgen_mesh(_: &SurfaceMesh, _: Side, _: [f64; 3], _: f64) -> Result<TetMesh> {
+    Err(Error::invalid_argument(
+        "this necklace was built without the `tetgen` feature (cargo build --features tetgen; AGPL-3.0)",
+    ))
 }
 
 /// One side of a surface as an implicit domain for the stuffing mesher.
@@ -359,9 +453,9 @@ impl Domain for SurfaceDomain<'_> {
     }
 }
 
-/// Where the solid or a gap between parts of the surface is thinner than `2h`, ask for
-/// spacing ≤ thickness / 2 so that at least one lattice vertex stays strictly inside
-/// after warping. Thickness at a surface vertex: the distance along the inward and the
+/// Where the solid or a gap between parts of the surface is thinner than `3h`, ask for
+/// spacing ≤ thickness / 3 so that lattice vertices stay strictly inside after warping
+/// (warping moves a vertex by up to 0.41 of an edge). Thickness at a surface vertex: the distance along the inward and the
 /// outward vertex normal to the next surface hit.
 fn thin_part_sizing(
     surface: &SurfaceMesh,
@@ -386,8 +480,8 @@ fn thin_part_sizing(
         for direction in [-1.0, 1.0] {
             let d = scale(normals[v], direction / len);
             let origin = add(p, scale(d, 1e-6 * h));
-            if let Some((t, _)) = distance.ray_hit(origin, d, 2.0 * h) {
-                let spacing = 0.5 * t;
+            if let Some((t, _)) = distance.ray_hit(origin, d, 3.0 * h) {
+                let spacing = t / 3.0;
                 out.push((p, spacing));
                 out.push((add(p, scale(d, 0.5 * t)), spacing));
             }

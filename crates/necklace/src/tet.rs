@@ -205,6 +205,62 @@ impl TetMesh {
         v - edges.len() as i64 + faces.len() as i64 - self.tets.len() as i64
     }
 
+    /// Connected components of the tets (through shared vertices): a component id per
+    /// tet, numbered in order of first appearance, and the count.
+    pub fn tet_components(&self) -> (Vec<u32>, usize) {
+        let mut parent: Vec<usize> = (0..self.num_vertices()).collect();
+        for t in &self.tets {
+            for k in 1..4 {
+                union(&mut parent, t[0] as usize, t[k] as usize);
+            }
+        }
+        let mut id_of_root = vec![u32::MAX; self.num_vertices()];
+        let mut count = 0u32;
+        let ids = self
+            .tets
+            .iter()
+            .map(|t| {
+                let r = find(&mut parent, t[0] as usize);
+                if id_of_root[r] == u32::MAX {
+                    id_of_root[r] = count;
+                    count += 1;
+                }
+                id_of_root[r]
+            })
+            .collect();
+        (ids, count as usize)
+    }
+
+    /// The mesh made of the tets with `keep[t]`, without the vertices no kept tet uses
+    /// (vertex order otherwise kept).
+    pub fn retain_tets(&self, keep: &[bool]) -> TetMesh {
+        let mut new_id = vec![u32::MAX; self.num_vertices()];
+        let tets: Vec<[u32; 4]> = self
+            .tets
+            .iter()
+            .zip(keep)
+            .filter(|(_, &k)| k)
+            .map(|(t, _)| *t)
+            .collect();
+        for t in &tets {
+            for &v in t {
+                new_id[v as usize] = 0;
+            }
+        }
+        let mut positions = Vec::new();
+        let mut kinds = Vec::new();
+        for (v, id) in new_id.iter_mut().enumerate() {
+            if *id == 0 {
+                *id = positions.len() as u32;
+                positions.push(self.positions[v]);
+                kinds.push(self.kinds[v]);
+            }
+        }
+        let tets = tets.iter().map(|t| t.map(|v| new_id[v as usize])).collect();
+        // Indices are remapped from a valid mesh, so construction cannot fail.
+        TetMesh::new(positions, tets, kinds).unwrap_or_else(|_| unreachable!())
+    }
+
     /// Smallest and largest dihedral angle over all tets, in degrees (`None` for no tets).
     pub fn dihedral_range_deg(&self) -> Option<(f64, f64)> {
         let mut range: Option<(f64, f64)> = None;

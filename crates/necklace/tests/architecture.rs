@@ -7,7 +7,9 @@ use std::path::Path;
 const DATA: &[&str] = &["error", "geom", "mesh", "tet"];
 /// Shared queries over data that several stages need (imports data only).
 const SERVICES: &[&str] = &["distance"];
-const STAGES: &[&str] = &["io", "shapes", "volume", "morse", "loops", "render"];
+const STAGES: &[&str] = &[
+    "io", "shapes", "volume", "morse", "loops", "render", "tetgen",
+];
 
 /// The top-level modules referenced as `crate::name` anywhere in `path` (file or dir).
 fn crate_imports(path: &Path) -> BTreeSet<String> {

@@ -58,6 +58,7 @@ fn orient(p: [Key; 4]) -> i128 {
 
 struct Builder<'a> {
     tree: &'a Octree,
+    dead: &'a dyn Fn(&Cell) -> bool,
     corners: HashSet<Key>,
     index: HashMap<Key, u32>,
     keys: Vec<Key>,
@@ -111,6 +112,7 @@ impl Builder<'_> {
 
     fn cell(&mut self, cell: Cell) {
         let c = cell.center();
+        let dead = (self.dead)(&cell);
         for axis in 0..3 {
             for side in [-1i64, 1] {
                 let quad = face_corners(&cell, axis, side);
@@ -118,7 +120,7 @@ impl Builder<'_> {
                 probe[axis] += side * (cell.size / 2 + 1);
                 match self.tree.leaf_containing(probe) {
                     Some(n) if n.size == cell.size => {
-                        if side > 0 {
+                        if side > 0 && !(dead && (self.dead)(&n)) {
                             let cn = n.center();
                             for i in 0..4 {
                                 let chain = self.chain(quad[i], quad[(i + 1) % 4]);
@@ -128,6 +130,7 @@ impl Builder<'_> {
                             }
                         }
                     }
+                    _ if dead => {}
                     Some(n) if n.size < cell.size => {
                         // Finer cells across: cone to each of the four sub-faces.
                         let m = [0, 1, 2, 3].map(|i| midpoint(quad[i], quad[(i + 1) % 4]));
@@ -144,8 +147,9 @@ impl Builder<'_> {
     }
 }
 
-/// Tetrahedralise the leaves of a balanced octree.
-pub(crate) fn tetrahedralize(tree: &Octree) -> Background {
+/// Tetrahedralise the leaves of a balanced octree, leaving out the tets that touch only
+/// `dead` leaves (leaves known to lie wholly outside the region).
+pub(crate) fn tetrahedralize(tree: &Octree, dead: &dyn Fn(&Cell) -> bool) -> Background {
     let leaves = tree.leaves();
     let mut corners = HashSet::with_capacity(leaves.len() * 2);
     for cell in &leaves {
@@ -155,6 +159,7 @@ pub(crate) fn tetrahedralize(tree: &Octree) -> Background {
     }
     let mut b = Builder {
         tree,
+        dead,
         corners,
         index: HashMap::with_capacity(leaves.len() * 3),
         keys: Vec::new(),
@@ -230,7 +235,7 @@ mod tests {
                     })
                     .collect()
             });
-            let b = tetrahedralize(&tree);
+            let b = tetrahedralize(&tree, &|_| false);
             assert_eq!(total_volume(&b), 6 * 32i128.pow(3), "volume of the root");
             assert_conforming(&b, root);
         }

@@ -29,6 +29,9 @@ mod octree;
 mod repair;
 mod stuffing;
 
+use std::collections::HashSet;
+use std::time::Instant;
+
 use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
@@ -84,7 +87,7 @@ impl StuffingOptions {
 }
 
 /// Counts that describe a stuffing run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct StuffingStats {
     /// Spacing along the boundary.
     pub h: f64,
@@ -107,6 +110,8 @@ pub struct StuffingStats {
     /// Interior vertices those drops left on the boundary (now boundary vertices,
     /// slightly inside the true surface).
     pub exposed_vertices: usize,
+    /// Seconds per step: octree, background, lattice values, stuffing, repair.
+    pub seconds: [f64; 5],
 }
 
 /// A stuffed volume mesh and its statistics.
@@ -166,6 +171,13 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         size: root_size,
     };
 
+    let mut clock = Instant::now();
+    let mut seconds = [0.0; 5];
+    let mut lap = |i: usize| {
+        seconds[i] = clock.elapsed().as_secs_f64();
+        clock = Instant::now();
+    };
+
     // 1. Octree.
     let sizing: Vec<(Key, i64)> = domain
         .sizing()
@@ -176,6 +188,9 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     let table = octree::sizing_table(root, &sizing);
     let mut cells_seen = 0usize;
     let mut too_big = false;
+    // Leaves whose closed cube lies wholly outside the region (value at the centre
+    // beyond the half diagonal): tets touching only such leaves produce nothing.
+    let mut dead: HashSet<Cell> = HashSet::new();
     let tree = Octree::build(root, |cells| {
         cells_seen += cells.len();
         if cells_seen > MAX_OCTREE_CELLS {
@@ -189,6 +204,9 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             .zip(values)
             .map(|(cell, f)| {
                 let size = cell.size as f64 * unit;
+                if f > 0.5 * 3f64.sqrt() * size * (1.0 + 1e-9) {
+                    dead.insert(*cell);
+                }
                 let wanted = domain.spacing_near(to_point(cell.center()), h).max(h);
                 let near_boundary = f.abs() < 0.5 * 3f64.sqrt() * size + wanted;
                 let coarse = size > wanted * (1.0 + 1e-9);
@@ -205,11 +223,14 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     }
     let leaves = tree.leaves();
     let finest = leaves.iter().map(|c| c.size).min().unwrap_or(root_size);
+    lap(0);
 
     // 2. Background BCC tetrahedralisation.
-    let background = background::tetrahedralize(&tree);
+    let background = background::tetrahedralize(&tree, &|c| dead.contains(c));
     let positions: Vec<[f64; 3]> = background.keys.iter().map(|&k| to_point(k)).collect();
+    lap(1);
     let values = domain.values(&positions);
+    lap(2);
 
     // 3. Stuffing.
     let keys = &background.keys;
@@ -220,12 +241,16 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     let value = |p: [f64; 3]| domain.value(p);
     let mut stuffed = stuffing::stuff(&value, positions, &values, &axis_parallel, &background.tets);
 
+    lap(3);
+
     // 4. Pinches below the lattice resolution.
     let mut interior: Vec<bool> = stuffed.signs.iter().map(|&s| s < 0).collect();
     let repair = repair::repair_pinches(&stuffed.positions, &mut stuffed.tets, &interior);
     for &v in &repair.exposed {
         interior[v as usize] = false;
     }
+
+    lap(4);
 
     // Keep the vertices the tets use, in index order.
     let mut new_id = vec![u32::MAX; stuffed.positions.len()];
@@ -268,6 +293,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             inverted_tets: stuffed.inverted,
             pinch_tets_removed: repair.removed_tets,
             exposed_vertices: repair.exposed.len(),
+            seconds,
         },
     })
 }

@@ -68,20 +68,22 @@ fn volume(positions: &[[f64; 3]], t: &[u32; 4]) -> f64 {
     dot(sub(b, a), cross(sub(c, a), sub(d, a))) / 6.0
 }
 
-/// Faces with one tet.
+/// Faces with one tet (sorted vertex triples, in sorted order).
 fn boundary_faces(tets: &[[u32; 4]]) -> Vec<[u32; 3]> {
-    let mut count: HashMap<[u32; 3], u32> = HashMap::with_capacity(4 * tets.len());
-    for t in tets {
-        for f in faces_of(t) {
-            *count.entry(f).or_default() += 1;
+    let mut faces: Vec<[u32; 3]> = tets.iter().flat_map(faces_of).collect();
+    faces.sort_unstable();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < faces.len() {
+        let mut j = i + 1;
+        while j < faces.len() && faces[j] == faces[i] {
+            j += 1;
         }
+        if j - i == 1 {
+            out.push(faces[i]);
+        }
+        i = j;
     }
-    let mut out: Vec<[u32; 3]> = count
-        .into_iter()
-        .filter(|(_, n)| *n == 1)
-        .map(|(f, _)| f)
-        .collect();
-    out.sort_unstable();
     out
 }
 

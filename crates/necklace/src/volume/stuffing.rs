@@ -88,18 +88,20 @@ pub(crate) fn stuff(
     // cut point that an earlier warp has not removed, and takes every cut point of its
     // edges with it.
     let mut alive = vec![true; edges.len()];
-    let mut incident: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for (e, &[a, b]) in edges.iter().enumerate() {
-        incident[a as usize].push(e as u32);
-        incident[b as usize].push(e as u32);
-    }
+    let incident = Csr::new(
+        n,
+        edges
+            .iter()
+            .enumerate()
+            .flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
+    );
     // Background tets around each vertex, to check that a warp keeps them positive.
-    let mut vertex_tets: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for (t, tet) in tets.iter().enumerate() {
-        for &v in tet {
-            vertex_tets[v as usize].push(t as u32);
-        }
-    }
+    let vertex_tets = Csr::new(
+        n,
+        tets.iter()
+            .enumerate()
+            .flat_map(|(t, tet)| tet.map(|v| (v, t as u32))),
+    );
     let volume6 = |p: &[[f64; 3]], t: &[u32; 4], moved: Option<(u32, [f64; 3])>| {
         let at = |v: u32| match moved {
             Some((m, q)) if m == v => q,
@@ -113,7 +115,7 @@ pub(crate) fn stuff(
     for v in 0..n {
         // Violating cut points that are still alive, closest first.
         candidates.clear();
-        for &e in &incident[v] {
+        for &e in incident.get(v) {
             let e = e as usize;
             if !alive[e] {
                 continue;
@@ -141,7 +143,7 @@ pub(crate) fn stuff(
         let choice = candidates.iter().find_map(|&(_, e)| {
             let [a, b] = edges[e];
             let q = lerp(positions[a as usize], positions[b as usize], params[e]);
-            let safe = vertex_tets[v].iter().all(|&t| {
+            let safe = vertex_tets.get(v).iter().all(|&t| {
                 let tet = &tets[t as usize];
                 volume6(&positions, tet, Some((v as u32, q)))
                     >= WARP_GUARD * volume6(&lattice_positions, tet, None)
@@ -152,7 +154,7 @@ pub(crate) fn stuff(
             positions[v] = q;
             signs[v] = 0;
             warped += 1;
-            for &e in &incident[v] {
+            for &e in incident.get(v) {
                 alive[e as usize] = false;
             }
         }
@@ -181,11 +183,25 @@ pub(crate) fn stuff(
     // Fill.
     let mut out = Vec::new();
     for t in tets {
-        let s = t.map(|v| signs[v as usize]);
-        let neg: Vec<u32> = (0..4).filter(|&i| s[i] < 0).map(|i| t[i]).collect();
-        let zero: Vec<u32> = (0..4).filter(|&i| s[i] == 0).map(|i| t[i]).collect();
-        let pos: Vec<u32> = (0..4).filter(|&i| s[i] > 0).map(|i| t[i]).collect();
-        match (neg.len(), zero.len(), pos.len()) {
+        let (mut neg, mut zero, mut pos) = ([0u32; 4], [0u32; 4], [0u32; 4]);
+        let (mut nn, mut nz, mut np) = (0, 0, 0);
+        for &v in t {
+            match signs[v as usize] {
+                s if s < 0 => {
+                    neg[nn] = v;
+                    nn += 1;
+                }
+                0 => {
+                    zero[nz] = v;
+                    nz += 1;
+                }
+                _ => {
+                    pos[np] = v;
+                    np += 1;
+                }
+            }
+        }
+        match (nn, nz, np) {
             (0, _, _) => {}
             (_, _, 0) => out.push(*t),
             (1, _, _) => {
@@ -251,6 +267,35 @@ pub(crate) fn stuff(
     }
 }
 
+/// Compressed lists: for each of `n` keys, the items pushed for it (in push order).
+struct Csr {
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Csr {
+    fn new(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> Csr {
+        let mut start = vec![0u32; n + 1];
+        for (k, _) in pairs.clone() {
+            start[k as usize + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut items = vec![0u32; start[n] as usize];
+        for (k, item) in pairs {
+            items[fill[k as usize] as usize] = item;
+            fill[k as usize] += 1;
+        }
+        Csr { start, items }
+    }
+
+    fn get(&self, k: usize) -> &[u32] {
+        &self.items[self.start[k] as usize..self.start[k + 1] as usize]
+    }
+}
+
 fn sign(f: f64) -> i8 {
     if f < 0.0 {
         -1
@@ -292,7 +337,9 @@ fn split_prism(p: [u32; 6], out: &mut Vec<[u32; 4]>) {
 }
 
 /// The parameter `t ∈ (0, 1)` of the root of `value` on the segment `a + t (b − a)`,
-/// where `fa` and `fb` have opposite signs: regula falsi (Illinois), safeguarded.
+/// where `fa` and `fb` have opposite signs: regula falsi with the Illinois rule, stopped
+/// when the value is below `1e-9 |b − a|` (a signed distance is nearly linear across a
+/// single face, so this takes two or three steps).
 fn root_on_edge(
     value: &(dyn Fn([f64; 3]) -> f64 + Sync),
     a: [f64; 3],
@@ -300,18 +347,18 @@ fn root_on_edge(
     fa: f64,
     fb: f64,
 ) -> f64 {
+    let tol = 1e-9 * norm(sub(b, a));
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
     let (mut flo, mut fhi) = (fa, fb);
     let mut side = 0i8;
-    let tol = 1e-9;
-    let mut t = flo / (flo - fhi);
+    let mut t = 0.5;
     for _ in 0..ROOT_STEPS {
         t = (lo * fhi - hi * flo) / (fhi - flo);
         if !(t > lo && t < hi) {
             t = 0.5 * (lo + hi);
         }
         let f = value(lerp(a, b, t));
-        if f == 0.0 || hi - lo < tol {
+        if f.abs() <= tol {
             break;
         }
         if (f < 0.0) == (flo < 0.0) {
