@@ -7,7 +7,12 @@
 //! ## Tour
 //! - [`mesh`]: [`SurfaceMesh`], the plain data every stage starts from, its topology and
 //!   its validity report ([`MeshReport`]).
-//! - [`io`]: reading OBJ, OFF, PLY and STL; writing OBJ, OFF and binary PLY.
+//! - [`io`]: reading OBJ, OFF, PLY and STL; writing OBJ, OFF and binary PLY; tet meshes
+//!   in TetGen, Medit, Gmsh and VTU formats.
+//! - [`tet`]: [`TetMesh`], the volume mesh every volume stage passes along.
+//! - [`distance`]: exact distance, winding number and rays against a surface.
+//! - [`volume`]: isosurface stuffing (Labelle & Shewchuk 2007) of an implicit region on
+//!   a graded BCC lattice; the paper's "preprocessing" (sec. 4) without TetGen.
 //! - [`shapes`]: analytic test shapes (signed distance functions meshed by marching
 //!   tetrahedra) with their known necks: the ground truth of the test suite.
 //! - [`pipeline`]: the only module that composes the others.

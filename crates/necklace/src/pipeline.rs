@@ -18,7 +18,7 @@ use serde::Serialize;
 
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
-use crate::geom::{add, norm, scale, sub};
+use crate::geom::{add, dot, norm, scale, sub};
 use crate::io;
 use crate::mesh::{MeshReport, SurfaceMesh};
 use crate::tet::{TetMesh, VertexKind};
@@ -394,6 +394,13 @@ impl SurfaceDomain<'_> {
         norm(sub(p, self.centre)) - self.radius
     }
 
+    /// Whether `p` is nearer the outer sphere than the surface.
+    fn nearer_the_sphere(&self, p: [f64; 3]) -> bool {
+        let to_sphere = self.sphere_value(p).abs();
+        let limit = to_sphere + 1e-12 * self.radius;
+        self.distance.distance_within(p, limit) > to_sphere
+    }
+
     fn combine(&self, p: [f64; 3], signed: f64) -> f64 {
         match self.side {
             Side::Inside => signed,
@@ -416,11 +423,46 @@ impl Domain for SurfaceDomain<'_> {
             .collect()
     }
 
+    fn values_within(&self, points: &[[f64; 3]], band: f64) -> Vec<f64> {
+        let signed = self.distance.signed_distances_within(points, band);
+        points
+            .iter()
+            .zip(signed)
+            .map(|(&p, s)| self.combine(p, s))
+            .collect()
+    }
+
+    fn crossing(&self, a: [f64; 3], b: [f64; 3]) -> Option<f64> {
+        let (sa, sb) = (self.sphere_value(a), self.sphere_value(b));
+        if self.side == Side::Outside && (sa < 0.0) != (sb < 0.0) {
+            // The outer sphere: solve |a + t (b − a) − c| = R.
+            let d = sub(b, a);
+            let m = sub(a, self.centre);
+            let (qa, qb, qc) = (
+                dot(d, d),
+                2.0 * dot(m, d),
+                dot(m, m) - self.radius * self.radius,
+            );
+            let disc = qb * qb - 4.0 * qa * qc;
+            if qa <= 0.0 || disc < 0.0 {
+                return None;
+            }
+            let roots = [
+                (-qb - disc.sqrt()) / (2.0 * qa),
+                (-qb + disc.sqrt()) / (2.0 * qa),
+            ];
+            return roots.into_iter().find(|t| *t > 0.0 && *t < 1.0);
+        }
+        // The surface: the first hit of the segment. A segment through a hole of an
+        // open mesh hits nothing; the mesher then searches the winding-number jump.
+        self.distance.ray_hit(a, sub(b, a), 1.0).map(|(t, _)| t)
+    }
+
     fn boundary_kind(&self, p: [f64; 3]) -> VertexKind {
         match self.side {
             Side::Inside => VertexKind::Surface,
             Side::Outside => {
-                if self.sphere_value(p).abs() < self.distance.distance(p) {
+                if self.nearer_the_sphere(p) {
                     VertexKind::Outer
                 } else {
                     VertexKind::Surface
@@ -441,6 +483,13 @@ impl Domain for SurfaceDomain<'_> {
 
     fn sizing(&self) -> Vec<([f64; 3], f64)> {
         self.sizing.clone()
+    }
+
+    fn coarsest_spacing(&self, h: f64) -> f64 {
+        match self.side {
+            Side::Inside => h,
+            Side::Outside => (self.radius / 8.0).max(h),
+        }
     }
 
     fn spacing_near(&self, p: [f64; 3], h: f64) -> f64 {

@@ -148,8 +148,14 @@ impl Bvh {
     /// The triangle (tree-order index) nearest to `p`, the closest point on it and the
     /// squared distance; `None` when there is no triangle or nothing is finitely near.
     pub fn nearest(&self, p: [f64; 3]) -> Option<(usize, [f64; 3], f64)> {
+        self.nearest_within(p, f64::INFINITY)
+    }
+
+    /// Like [`Bvh::nearest`], but only triangles closer than `sqrt(limit2)` count; far
+    /// queries then prune almost the whole tree.
+    pub fn nearest_within(&self, p: [f64; 3], limit2: f64) -> Option<(usize, [f64; 3], f64)> {
         let root = self.nodes.first()?;
-        let mut best = f64::INFINITY;
+        let mut best = limit2;
         let mut found: Option<(usize, [f64; 3])> = None;
         let mut stack = [(0u32, 0.0f64); STACK];
         stack[0] = (0, root.dist2(p));

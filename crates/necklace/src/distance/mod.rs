@@ -193,6 +193,37 @@ impl SurfaceDistance {
         }
     }
 
+    /// `min(distance(p), limit)`, pruning everything farther than `limit`.
+    pub fn distance_within(&self, p: [f64; 3], limit: f64) -> f64 {
+        match self.bvh.nearest_within(p, limit * limit) {
+            Some((_, _, d2)) => d2.sqrt(),
+            None => limit,
+        }
+    }
+
+    /// [`signed_distance`](Self::signed_distance) where the distance is below `band`;
+    /// beyond it, `±band` with the right sign (much cheaper far from the surface).
+    pub fn signed_distance_within(&self, p: [f64; 3], band: f64) -> f64 {
+        let d = match self.bvh.nearest_within(p, band * band) {
+            Some((_, _, d2)) => d2.sqrt(),
+            None => band,
+        };
+        if d > 0.0 && d.is_finite() && self.is_inside(p) {
+            -d
+        } else {
+            d
+        }
+    }
+
+    /// [`signed_distance_within`](Self::signed_distance_within) of every point, in
+    /// parallel.
+    pub fn signed_distances_within(&self, points: &[[f64; 3]], band: f64) -> Vec<f64> {
+        points
+            .par_iter()
+            .map(|&p| self.signed_distance_within(p, band))
+            .collect()
+    }
+
     /// [`distance`](Self::distance) of every point, in parallel.
     pub fn distances(&self, points: &[[f64; 3]]) -> Vec<f64> {
         points.par_iter().map(|&p| self.distance(p)).collect()

@@ -11,7 +11,7 @@
 //! is finer), which both sides see identically, so the result is conforming.
 //! Orientation is decided exactly on the integer coordinates.
 
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 use super::octree::{Cell, Key, Octree};
 
@@ -118,7 +118,7 @@ impl Builder<'_> {
                 let quad = face_corners(&cell, axis, side);
                 let mut probe = c;
                 probe[axis] += side * (cell.size / 2 + 1);
-                match self.tree.leaf_containing(probe) {
+                match self.tree.leaf_containing_from(probe, cell.size / 2) {
                     Some(n) if n.size == cell.size => {
                         if side > 0 && !(dead && (self.dead)(&n)) {
                             let cn = n.center();
@@ -151,7 +151,7 @@ impl Builder<'_> {
 /// `dead` leaves (leaves known to lie wholly outside the region).
 pub(crate) fn tetrahedralize(tree: &Octree, dead: &dyn Fn(&Cell) -> bool) -> Background {
     let leaves = tree.leaves();
-    let mut corners = HashSet::with_capacity(leaves.len() * 2);
+    let mut corners = HashSet::with_capacity_and_hasher(leaves.len() * 2, Default::default());
     for cell in &leaves {
         for c in 0..8 {
             corners.insert(cell.corner(c));
@@ -161,7 +161,7 @@ pub(crate) fn tetrahedralize(tree: &Octree, dead: &dyn Fn(&Cell) -> bool) -> Bac
         tree,
         dead,
         corners,
-        index: HashMap::with_capacity(leaves.len() * 3),
+        index: HashMap::with_capacity_and_hasher(leaves.len() * 3, Default::default()),
         keys: Vec::new(),
         tets: Vec::with_capacity(leaves.len() * 12),
     };
@@ -187,7 +187,7 @@ mod tests {
 
     /// Every interior face is shared by exactly two tets, boundary faces lie on the root.
     fn assert_conforming(b: &Background, root: Cell) {
-        let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
+        let mut faces: HashMap<[u32; 3], usize> = HashMap::default();
         for t in &b.tets {
             for skip in 0..4 {
                 let mut f = [0u32; 3];

@@ -29,7 +29,7 @@ mod octree;
 mod repair;
 mod stuffing;
 
-use std::collections::HashSet;
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::time::Instant;
 
 use serde::Serialize;
@@ -49,6 +49,22 @@ pub trait Domain: Sync {
         points.iter().map(|&p| self.value(p)).collect()
     }
 
+    /// Like [`Domain::values`], but only values of magnitude below `band` must be exact;
+    /// beyond it any value of the right sign and magnitude ≥ `band` will do (lets an
+    /// implementation skip exact distances far from the boundary).
+    fn values_within(&self, points: &[[f64; 3]], band: f64) -> Vec<f64> {
+        let _ = band;
+        self.values(points)
+    }
+
+    /// Where the segment `a`–`b` (whose ends have opposite signs) crosses the boundary,
+    /// as a parameter in (0, 1), if the domain can say directly (e.g. by a ray cast);
+    /// `None` lets the mesher search for the root of [`Domain::value`].
+    fn crossing(&self, a: [f64; 3], b: [f64; 3]) -> Option<f64> {
+        let _ = (a, b);
+        None
+    }
+
     /// Which boundary a point on the zero set lies on.
     fn boundary_kind(&self, p: [f64; 3]) -> VertexKind;
 
@@ -63,6 +79,11 @@ pub trait Domain: Sync {
     /// The spacing wanted where the boundary passes near `p`, given the requested `h`:
     /// `h` by default; a shell returns more near its outer sphere, which needs no detail.
     fn spacing_near(&self, _p: [f64; 3], h: f64) -> f64 {
+        h
+    }
+
+    /// The largest value [`Domain::spacing_near`] returns for this `h`.
+    fn coarsest_spacing(&self, h: f64) -> f64 {
         h
     }
 }
@@ -190,7 +211,9 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     let mut too_big = false;
     // Leaves whose closed cube lies wholly outside the region (value at the centre
     // beyond the half diagonal): tets touching only such leaves produce nothing.
-    let mut dead: HashSet<Cell> = HashSet::new();
+    let mut dead: HashSet<Cell> = HashSet::default();
+    // Every evaluated cell's centre value (exact below its band, else a bound).
+    let mut centre_values: HashMap<Cell, f64> = HashMap::default();
     let tree = Octree::build(root, |cells| {
         cells_seen += cells.len();
         if cells_seen > MAX_OCTREE_CELLS {
@@ -198,20 +221,28 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             return vec![false; cells.len()];
         }
         let centres: Vec<[f64; 3]> = cells.iter().map(|c| to_point(c.center())).collect();
-        let values = domain.values(&centres);
+        // All cells of one level have the same size.
+        let half_diagonal = 0.5 * 3f64.sqrt() * cells.first().map_or(0, |c| c.size) as f64 * unit;
+        let coarsest = domain.coarsest_spacing(h).max(h);
+        let values = domain.values_within(&centres, half_diagonal + coarsest);
         cells
             .iter()
             .zip(values)
             .map(|(cell, f)| {
-                let size = cell.size as f64 * unit;
-                if f > 0.5 * 3f64.sqrt() * size * (1.0 + 1e-9) {
+                centre_values.insert(*cell, f);
+                if f > half_diagonal * (1.0 + 1e-9) {
                     dead.insert(*cell);
                 }
-                let wanted = domain.spacing_near(to_point(cell.center()), h).max(h);
-                let near_boundary = f.abs() < 0.5 * 3f64.sqrt() * size + wanted;
-                let coarse = size > wanted * (1.0 + 1e-9);
                 let thin = table.get(cell).is_some_and(|&req| req < cell.size);
-                (coarse && near_boundary) || thin
+                if thin {
+                    return true;
+                }
+                if f.abs() >= half_diagonal + coarsest {
+                    return false;
+                }
+                let size = cell.size as f64 * unit;
+                let wanted = domain.spacing_near(to_point(cell.center()), h).max(h);
+                f.abs() < half_diagonal + wanted && size > wanted * (1.0 + 1e-9)
             })
             .collect()
     });
@@ -229,7 +260,27 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     let background = background::tetrahedralize(&tree, &|c| dead.contains(c));
     let positions: Vec<[f64; 3]> = background.keys.iter().map(|&k| to_point(k)).collect();
     lap(1);
-    let values = domain.values(&positions);
+    // Only signs matter at lattice vertices (cut points are found on the true function).
+    // A vertex inside a leaf whose centre value exceeds the half diagonal has that sign
+    // (the function is 1-Lipschitz); only the others are evaluated.
+    let mut values = vec![0.0; positions.len()];
+    let mut unknown = Vec::new();
+    for (v, &k) in background.keys.iter().enumerate() {
+        let known = tree.leaf_containing(k).and_then(|leaf| {
+            let f = *centre_values.get(&leaf)?;
+            let half_diagonal = 0.5 * 3f64.sqrt() * leaf.size as f64 * unit;
+            (f.abs() > half_diagonal * (1.0 + 1e-6))
+                .then(|| f.signum() * (f.abs() - half_diagonal).max(1e-6 * half_diagonal))
+        });
+        match known {
+            Some(f) => values[v] = f,
+            None => unknown.push(v),
+        }
+    }
+    let points: Vec<[f64; 3]> = unknown.iter().map(|&v| positions[v]).collect();
+    for (&v, f) in unknown.iter().zip(domain.values_within(&points, h)) {
+        values[v] = f;
+    }
     lap(2);
 
     // 3. Stuffing.
@@ -239,7 +290,15 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         (0..3).filter(|&k| ka[k] != kb[k]).count() == 1
     };
     let value = |p: [f64; 3]| domain.value(p);
-    let mut stuffed = stuffing::stuff(&value, positions, &values, &axis_parallel, &background.tets);
+    let crossing = |a: [f64; 3], b: [f64; 3]| domain.crossing(a, b);
+    let mut stuffed = stuffing::stuff(
+        &value,
+        &crossing,
+        positions,
+        &values,
+        &axis_parallel,
+        &background.tets,
+    );
 
     lap(3);
 

@@ -6,7 +6,7 @@
 //! a caller-supplied rule and then balanced: cells that touch (by a face, an edge or a
 //! corner) differ in size by at most a factor of two.
 
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 /// An integer point in units.
 pub(crate) type Key = [i64; 3];
@@ -55,7 +55,7 @@ impl Octree {
     /// Refine from `root`, level by level: `refine` gets the cells of one level and says
     /// which to split (cells of size 2, the smallest, are never split). Then balance.
     pub fn build(root: Cell, mut refine: impl FnMut(&[Cell]) -> Vec<bool>) -> Octree {
-        let mut leaves = HashSet::new();
+        let mut leaves = HashSet::default();
         let mut level = vec![root];
         while !level.is_empty() {
             let split = refine(&level);
@@ -89,10 +89,16 @@ impl Octree {
 
     /// The leaf whose half-open cube contains `p`, if `p` is in the root.
     pub fn leaf_containing(&self, p: Key) -> Option<Cell> {
+        self.leaf_containing_from(p, 2)
+    }
+
+    /// [`Octree::leaf_containing`] when the leaf is known to be at least `min_size`
+    /// (fewer lookups: balanced neighbours are at least half a cell's size).
+    pub fn leaf_containing_from(&self, p: Key, min_size: i64) -> Option<Cell> {
         if !self.contains(p) {
             return None;
         }
-        let mut size = 2;
+        let mut size = min_size.max(2);
         while size <= self.root.size {
             let origin = [0, 1, 2].map(|k| {
                 let rel = p[k] - self.root.origin[k];
@@ -116,7 +122,8 @@ impl Octree {
                 continue;
             }
             for probe in neighbour_probes(cell) {
-                let Some(n) = self.leaf_containing(probe) else {
+                // Only a neighbour larger than twice this cell matters.
+                let Some(n) = self.leaf_containing_from(probe, 4 * cell.size) else {
                     continue;
                 };
                 if n.size > 2 * cell.size {
@@ -150,7 +157,7 @@ fn neighbour_probes(cell: Cell) -> impl Iterator<Item = Key> {
 /// Record the smallest required cell size at each cell that contains a sizing point, at
 /// every level, so refinement can look it up per cell.
 pub(crate) fn sizing_table(root: Cell, points: &[(Key, i64)]) -> HashMap<Cell, i64> {
-    let mut table: HashMap<Cell, i64> = HashMap::new();
+    let mut table: HashMap<Cell, i64> = HashMap::default();
     for &(p, required) in points {
         let mut size = root.size;
         while size >= 2 {

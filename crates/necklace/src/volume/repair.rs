@@ -11,7 +11,7 @@
 //! that a dropped tet leaves on the boundary become boundary vertices; both counts are
 //! reported.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use crate::geom::{cross, dot, sub};
 use crate::mesh::{SurfaceMesh, Topology};
@@ -104,8 +104,8 @@ fn faces_of(t: &[u32; 4]) -> [[u32; 3]; 4] {
 fn pinched_tets(positions: &[[f64; 3]], tets: &[[u32; 4]]) -> Vec<usize> {
     let boundary = boundary_faces(tets);
     // Candidate vertices and edges: those on the boundary.
-    let mut boundary_edges: HashMap<[u32; 2], u32> = HashMap::new();
-    let mut on_boundary: HashMap<u32, ()> = HashMap::new();
+    let mut boundary_edges: HashMap<[u32; 2], u32> = HashMap::default();
+    let mut on_boundary: HashMap<u32, ()> = HashMap::default();
     for f in &boundary {
         for (i, j) in [(0, 1), (0, 2), (1, 2)] {
             *boundary_edges.entry([f[i], f[j]]).or_default() += 1;
@@ -115,7 +115,7 @@ fn pinched_tets(positions: &[[f64; 3]], tets: &[[u32; 4]]) -> Vec<usize> {
         }
     }
     // Tets around each boundary vertex.
-    let mut around: HashMap<u32, Vec<usize>> = HashMap::new();
+    let mut around: HashMap<u32, Vec<usize>> = HashMap::default();
     for (t, tet) in tets.iter().enumerate() {
         for &v in tet {
             if on_boundary.contains_key(&v) {
@@ -191,7 +191,7 @@ fn face_connected_groups(tets: &[[u32; 4]], star: &[usize], through: &[u32]) -> 
         }
         x
     }
-    let mut by_face: HashMap<[u32; 3], usize> = HashMap::new();
+    let mut by_face: HashMap<[u32; 3], usize> = HashMap::default();
     for (i, &t) in star.iter().enumerate() {
         for f in faces_of(&tets[t]) {
             if through.iter().all(|v| f.contains(v)) {
@@ -204,7 +204,7 @@ fn face_connected_groups(tets: &[[u32; 4]], star: &[usize], through: &[u32]) -> 
             }
         }
     }
-    let mut groups: HashMap<usize, Vec<usize>> = HashMap::new();
+    let mut groups: HashMap<usize, Vec<usize>> = HashMap::default();
     for (i, &t) in star.iter().enumerate() {
         let r = find(&mut parent, i);
         groups.entry(r).or_default().push(t);

