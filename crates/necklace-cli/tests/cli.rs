@@ -119,3 +119,61 @@ fn shape_list_names_every_shape() {
         assert!(text.contains(&format!("{name}:")), "{name} missing");
     }
 }
+
+#[test]
+fn volume_json_has_the_documented_fields_and_writes_the_mesh() {
+    let dir = temp_dir("volume");
+    let surface = dir.join("torus.off");
+    let out = necklace(&[
+        "shape",
+        "torus",
+        "--param",
+        "res=24",
+        "-o",
+        surface.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let vtu = dir.join("torus.vtu");
+    let out = necklace(&[
+        "volume",
+        surface.to_str().unwrap(),
+        "--exterior",
+        "--h",
+        "0.15",
+        "-o",
+        vtu.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in [
+        "vertices",
+        "tets",
+        "interior_vertices",
+        "surface_vertices",
+        "outer_vertices",
+        "euler_volume",
+        "euler_boundary",
+        "min_dihedral_deg",
+        "max_dihedral_deg",
+        "hausdorff_to_surface",
+        "h",
+        "seconds",
+    ] {
+        assert!(json.get(key).is_some(), "missing key {key}");
+    }
+    // The shell around a torus: χ = 1, boundary = sphere + torus, χ = 2.
+    assert_eq!(json["euler_volume"], serde_json::json!(1));
+    assert_eq!(json["euler_boundary"], serde_json::json!(2));
+    assert!(json["outer_vertices"].as_u64().unwrap() > 0);
+    assert!(std::fs::metadata(&vtu).unwrap().len() > 1000);
+
+    let out = necklace(&["volume", surface.to_str().unwrap(), "--h", "-1"]);
+    assert_eq!(out.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(dir);
+}
