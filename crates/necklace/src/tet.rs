@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{cross, dot, norm, sub};
-use crate::mesh::{find, union};
+use crate::mesh::{check_finite, find, union};
 
 /// Where a vertex of a tet mesh lies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -58,15 +58,7 @@ impl TetMesh {
                 format!("{} vertex kinds for {n} vertices", kinds.len()),
             ));
         }
-        if let Some(i) = positions
-            .iter()
-            .position(|p| p.iter().any(|c| !c.is_finite()))
-        {
-            return Err(Error::new(
-                ErrorKind::NonFinite,
-                format!("vertex {i} has a non-finite coordinate"),
-            ));
-        }
+        check_finite(&positions)?;
         for (t, tet) in tets.iter().enumerate() {
             if let Some(&v) = tet.iter().find(|&&v| v as usize >= n) {
                 return Err(Error::new(

@@ -39,18 +39,24 @@ pub struct SurfaceMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// An error naming the first vertex with a NaN or infinite coordinate.
+pub(crate) fn check_finite(positions: &[[f64; 3]]) -> Result<()> {
+    match positions
+        .iter()
+        .position(|p| p.iter().any(|c| !c.is_finite()))
+    {
+        Some(i) => Err(Error::new(
+            ErrorKind::NonFinite,
+            format!("vertex {i} has a non-finite coordinate"),
+        )),
+        None => Ok(()),
+    }
+}
+
 impl SurfaceMesh {
     /// Build a mesh, checking that every index is in range and every coordinate finite.
     pub fn new(positions: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> Result<Self> {
-        if let Some(i) = positions
-            .iter()
-            .position(|p| p.iter().any(|c| !c.is_finite()))
-        {
-            return Err(Error::new(
-                ErrorKind::NonFinite,
-                format!("vertex {i} has a non-finite coordinate"),
-            ));
-        }
+        check_finite(&positions)?;
         let n = positions.len();
         for (f, t) in triangles.iter().enumerate() {
             if let Some(&v) = t.iter().find(|&&v| v as usize >= n) {
