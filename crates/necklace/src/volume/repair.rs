@@ -11,10 +11,9 @@
 //! that a dropped tet leaves on the boundary become boundary vertices; both counts are
 //! reported.
 
-use rustc_hash::FxHashMap as HashMap;
+use rayon::prelude::*;
 
 use crate::geom::{cross, dot, sub};
-use crate::mesh::{SurfaceMesh, Topology};
 
 /// What the repair changed.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -29,36 +28,85 @@ const MAX_ROUNDS: usize = 20;
 
 /// Remove tets until no edge or vertex of the boundary is pinched; `interior[v]` says
 /// which vertices were strictly inside before.
+///
+/// Every check is local to a vertex star (all tets with a face at `v` contain `v`), so
+/// after the first round only the vertices of dropped tets are looked at again.
 pub(crate) fn repair_pinches(
     positions: &[[f64; 3]],
     tets: &mut Vec<[u32; 4]>,
     interior: &[bool],
 ) -> Repair {
+    let n = positions.len();
+    let (star_start, star_items) = lists(
+        n,
+        tets.iter()
+            .enumerate()
+            .flat_map(|(t, tet)| tet.map(|v| (v, t as u32))),
+    );
+    let mut alive = vec![true; tets.len()];
+    // Before any drop, the boundary vertices are exactly the used non-interior ones
+    // (an interior vertex has its whole star).
+    let mut candidates: Vec<u32> = (0..n as u32)
+        .filter(|&v| !interior[v as usize] && star_start[v as usize] < star_start[v as usize + 1])
+        .collect();
+    let mut touched: Vec<u32> = Vec::new();
+
     let mut repair = Repair::default();
     for _ in 0..MAX_ROUNDS {
-        let drop = pinched_tets(positions, tets);
+        // Vertices are checked independently (in parallel); the sorted union of what
+        // they drop does not depend on the thread count.
+        let mut drop: Vec<u32> = candidates
+            .par_iter()
+            .map_init(Scratch::default, |scratch, &v| {
+                let star: Vec<u32> = star_items
+                    [star_start[v as usize] as usize..star_start[v as usize + 1] as usize]
+                    .iter()
+                    .copied()
+                    .filter(|&t| alive[t as usize])
+                    .collect();
+                scratch.pinch_at(positions, tets, &star, v)
+            })
+            .flatten()
+            .collect();
+        drop.sort_unstable();
+        drop.dedup();
         if drop.is_empty() {
             break;
         }
         repair.removed_tets += drop.len();
-        let mut keep = vec![true; tets.len()];
-        for t in drop {
-            keep[t] = false;
+        candidates.clear();
+        for &t in &drop {
+            alive[t as usize] = false;
+            candidates.extend(tets[t as usize]);
         }
+        candidates.sort_unstable();
+        candidates.dedup();
+        touched.extend_from_slice(&candidates);
+    }
+    // Interior vertices next to a dropped tet that now have a boundary face.
+    touched.sort_unstable();
+    touched.dedup();
+    for v in touched.into_iter().filter(|&v| interior[v as usize]) {
+        let mut faces: Vec<[u32; 3]> = star_items
+            [star_start[v as usize] as usize..star_start[v as usize + 1] as usize]
+            .iter()
+            .filter(|&&t| alive[t as usize])
+            .flat_map(|&t| faces_of(&tets[t as usize]))
+            .filter(|f| f.contains(&v))
+            .collect();
+        faces.sort_unstable();
+        let mut on_boundary = false;
+        runs(&faces, |_, count| on_boundary |= count == 1);
+        if on_boundary {
+            repair.exposed.push(v);
+        }
+    }
+    if repair.removed_tets > 0 {
         let mut i = 0;
         tets.retain(|_| {
             i += 1;
-            keep[i - 1]
+            alive[i - 1]
         });
-    }
-    if repair.removed_tets > 0 {
-        for f in boundary_faces(tets) {
-            repair
-                .exposed
-                .extend(f.into_iter().filter(|&v| interior[v as usize]));
-        }
-        repair.exposed.sort_unstable();
-        repair.exposed.dedup();
     }
     repair
 }
@@ -68,23 +116,17 @@ fn volume(positions: &[[f64; 3]], t: &[u32; 4]) -> f64 {
     dot(sub(b, a), cross(sub(c, a), sub(d, a))) / 6.0
 }
 
-/// Faces with one tet (sorted vertex triples, in sorted order).
-fn boundary_faces(tets: &[[u32; 4]]) -> Vec<[u32; 3]> {
-    let mut faces: Vec<[u32; 3]> = tets.iter().flat_map(faces_of).collect();
-    faces.sort_unstable();
-    let mut out = Vec::new();
+/// Sorted runs of equal items: calls `f(item, count)` once per distinct item.
+fn runs<T: PartialEq + Copy>(sorted: &[T], mut f: impl FnMut(T, usize)) {
     let mut i = 0;
-    while i < faces.len() {
+    while i < sorted.len() {
         let mut j = i + 1;
-        while j < faces.len() && faces[j] == faces[i] {
+        while j < sorted.len() && sorted[j] == sorted[i] {
             j += 1;
         }
-        if j - i == 1 {
-            out.push(faces[i]);
-        }
+        f(sorted[i], j - i);
         i = j;
     }
-    out
 }
 
 /// The four faces of a tet, each with sorted vertices.
@@ -99,141 +141,170 @@ fn faces_of(t: &[u32; 4]) -> [[u32; 3]; 4] {
     ]
 }
 
-/// The tets to drop this round: at every pinched edge and vertex, all groups but the
-/// one of largest volume.
-fn pinched_tets(positions: &[[f64; 3]], tets: &[[u32; 4]]) -> Vec<usize> {
-    let boundary = boundary_faces(tets);
-    // Candidate vertices and edges: those on the boundary.
-    let mut boundary_edges: HashMap<[u32; 2], u32> = HashMap::default();
-    let mut on_boundary: HashMap<u32, ()> = HashMap::default();
-    for f in &boundary {
-        for (i, j) in [(0, 1), (0, 2), (1, 2)] {
-            *boundary_edges.entry([f[i], f[j]]).or_default() += 1;
-        }
-        for &v in f {
-            on_boundary.insert(v, ());
-        }
+/// For each of `n` keys, the items listed for it (CSR: starts and items).
+fn lists(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; n + 1];
+    for (k, _) in pairs.clone() {
+        start[k as usize + 1] += 1;
     }
-    // Tets around each boundary vertex.
-    let mut around: HashMap<u32, Vec<usize>> = HashMap::default();
-    for (t, tet) in tets.iter().enumerate() {
-        for &v in tet {
-            if on_boundary.contains_key(&v) {
-                around.entry(v).or_default().push(t);
-            }
-        }
+    for i in 0..n {
+        start[i + 1] += start[i];
     }
-    let mut drop: Vec<usize> = Vec::new();
-    let mut dropped = vec![false; tets.len()];
-    let mark = |group: &[usize], dropped: &mut Vec<bool>, drop: &mut Vec<usize>| {
-        for &t in group {
-            if !dropped[t] {
-                dropped[t] = true;
-                drop.push(t);
-            }
-        }
-    };
-    // Pinched edges: more than two boundary faces.
-    let mut pinched_edges: Vec<[u32; 2]> = boundary_edges
-        .iter()
-        .filter(|(_, n)| **n > 2)
-        .map(|(e, _)| *e)
-        .collect();
-    pinched_edges.sort_unstable();
-    for [a, b] in pinched_edges {
-        let star: Vec<usize> = around[&a]
-            .iter()
-            .copied()
-            .filter(|&t| tets[t].contains(&b))
-            .collect();
-        let groups = face_connected_groups(tets, &star, &[a, b]);
-        for g in minority(positions, tets, &groups) {
-            mark(g, &mut dropped, &mut drop);
-        }
+    let mut fill = start.clone();
+    let mut items = vec![0u32; start[n] as usize];
+    for (k, item) in pairs {
+        items[fill[k as usize] as usize] = item;
+        fill[k as usize] += 1;
     }
-    // Pinched vertices: tets around the vertex fall into several face-connected groups
-    // (drop all but the largest), or form one group whose boundary faces make several
-    // fans, a tunnel pinched to a point (drop the whole star: this opens the tunnel).
-    let surface = SurfaceMesh {
-        positions: positions.to_vec(),
-        triangles: boundary.clone(),
-    };
-    let mut fanned: Vec<u32> = Topology::new(&surface)
-        .non_manifold_vertices(&surface)
-        .into_iter()
-        .map(|v| v as u32)
-        .collect();
-    fanned.sort_unstable();
-    let mut vertices: Vec<u32> = around.keys().copied().collect();
-    vertices.sort_unstable();
-    for v in vertices {
-        let star = &around[&v];
-        let groups = face_connected_groups(tets, star, &[v]);
-        if groups.len() > 1 {
-            for g in minority(positions, tets, &groups) {
-                mark(g, &mut dropped, &mut drop);
-            }
-        } else if fanned.binary_search(&v).is_ok() {
-            mark(star, &mut dropped, &mut drop);
-        }
-    }
-    drop.sort_unstable();
-    drop
+    (start, items)
 }
 
-/// Groups of `star` connected through faces that contain all of `through`.
-fn face_connected_groups(tets: &[[u32; 4]], star: &[usize], through: &[u32]) -> Vec<Vec<usize>> {
-    let mut parent: Vec<usize> = (0..star.len()).collect();
-    fn find(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
+/// Number of fans formed by the boundary faces at `v` (faces sharing an edge at `v`).
+fn fans(faces: &[[u32; 3]], v: u32) -> usize {
+    let mut parent: Vec<usize> = (0..faces.len()).collect();
+    let mut spokes: Vec<(u32, usize)> = Vec::with_capacity(2 * faces.len());
+    for (k, f) in faces.iter().enumerate() {
+        for &w in f {
+            if w != v {
+                spokes.push((w, k));
+            }
         }
-        x
     }
-    let mut by_face: HashMap<[u32; 3], usize> = HashMap::default();
-    for (i, &t) in star.iter().enumerate() {
-        for f in faces_of(&tets[t]) {
-            if through.iter().all(|v| f.contains(v)) {
-                if let Some(&j) = by_face.get(&f) {
-                    let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
-                    parent[ri.max(rj)] = ri.min(rj);
-                } else {
-                    by_face.insert(f, i);
+    spokes.sort_unstable();
+    for pair in spokes.windows(2) {
+        if pair[0].0 == pair[1].0 {
+            let (a, b) = (root(&mut parent, pair[0].1), root(&mut parent, pair[1].1));
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    (0..faces.len())
+        .filter(|&k| root(&mut parent, k) == k)
+        .count()
+}
+
+fn root(p: &mut [usize], mut x: usize) -> usize {
+    while p[x] != x {
+        p[x] = p[p[x]];
+        x = p[x];
+    }
+    x
+}
+
+/// Reusable buffers for grouping the tets of a star.
+#[derive(Default)]
+struct Scratch {
+    parent: Vec<usize>,
+    faces: Vec<([u32; 3], usize)>,
+}
+
+impl Scratch {
+    /// The tets to drop at vertex `v` with (alive) star `star`: minority fans of each
+    /// pinched edge at `v` (more than two boundary faces), minority groups of the star,
+    /// or the whole star when its boundary faces form several fans.
+    fn pinch_at(
+        &mut self,
+        positions: &[[f64; 3]],
+        tets: &[[u32; 4]],
+        star: &[u32],
+        v: u32,
+    ) -> Vec<u32> {
+        // Boundary faces at v: faces through v used by one tet of the star.
+        let mut faces: Vec<[u32; 3]> = star
+            .iter()
+            .flat_map(|&t| faces_of(&tets[t as usize]))
+            .filter(|f| f.contains(&v))
+            .collect();
+        faces.sort_unstable();
+        let mut boundary = Vec::new();
+        runs(&faces, |f, count| {
+            if count == 1 {
+                boundary.push(f);
+            }
+        });
+        if boundary.is_empty() {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        // Edges at v with more than two boundary faces.
+        let mut others: Vec<u32> = boundary
+            .iter()
+            .flat_map(|f| f.iter().copied().filter(move |&w| w != v))
+            .collect();
+        others.sort_unstable();
+        let mut pinched = Vec::new();
+        runs(&others, |w, count| {
+            if count > 2 {
+                pinched.push(w);
+            }
+        });
+        for w in pinched {
+            let edge_star: Vec<u32> = star
+                .iter()
+                .copied()
+                .filter(|&t| tets[t as usize].contains(&w))
+                .collect();
+            for g in self.minority_groups(positions, tets, &edge_star, &[v, w]) {
+                out.extend(g);
+            }
+        }
+        let groups = self.minority_groups(positions, tets, star, &[v]);
+        if !groups.is_empty() {
+            for g in groups {
+                out.extend(g);
+            }
+        } else if fans(&boundary, v) > 1 {
+            out.extend_from_slice(star);
+        }
+        out
+    }
+
+    /// The groups of `star` (connected through faces that contain all of `through`)
+    /// other than the one of largest volume; empty when the star is one group.
+    fn minority_groups(
+        &mut self,
+        positions: &[[f64; 3]],
+        tets: &[[u32; 4]],
+        star: &[u32],
+        through: &[u32],
+    ) -> Vec<Vec<u32>> {
+        self.parent.clear();
+        self.parent.extend(0..star.len());
+        self.faces.clear();
+        for (i, &t) in star.iter().enumerate() {
+            for f in faces_of(&tets[t as usize]) {
+                if through.iter().all(|v| f.contains(v)) {
+                    self.faces.push((f, i));
                 }
             }
         }
+        self.faces.sort_unstable();
+        for k in 1..self.faces.len() {
+            if self.faces[k].0 == self.faces[k - 1].0 {
+                let (a, b) = (
+                    root(&mut self.parent, self.faces[k].1),
+                    root(&mut self.parent, self.faces[k - 1].1),
+                );
+                self.parent[a.max(b)] = a.min(b);
+            }
+        }
+        let roots: Vec<usize> = (0..star.len()).map(|i| root(&mut self.parent, i)).collect();
+        let mut distinct = roots.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        if distinct.len() < 2 {
+            return Vec::new();
+        }
+        let mut groups: Vec<Vec<u32>> = vec![Vec::new(); distinct.len()];
+        let mut volumes = vec![0.0; distinct.len()];
+        for (i, &r) in roots.iter().enumerate() {
+            let g = distinct.binary_search(&r).unwrap_or(0);
+            groups[g].push(star[i]);
+            volumes[g] += volume(positions, &tets[star[i] as usize]);
+        }
+        let best = (0..groups.len())
+            .max_by(|&i, &j| volumes[i].total_cmp(&volumes[j]).then(j.cmp(&i)))
+            .unwrap_or(0);
+        groups.swap_remove(best);
+        groups
     }
-    let mut groups: HashMap<usize, Vec<usize>> = HashMap::default();
-    for (i, &t) in star.iter().enumerate() {
-        let r = find(&mut parent, i);
-        groups.entry(r).or_default().push(t);
-    }
-    let mut out: Vec<Vec<usize>> = groups.into_values().collect();
-    out.sort_unstable();
-    out
-}
-
-/// All groups but the one of largest volume (ties: the first).
-fn minority<'a>(
-    positions: &[[f64; 3]],
-    tets: &[[u32; 4]],
-    groups: &'a [Vec<usize>],
-) -> Vec<&'a Vec<usize>> {
-    if groups.len() < 2 {
-        return Vec::new();
-    }
-    let volumes: Vec<f64> = groups
-        .iter()
-        .map(|g| g.iter().map(|&t| volume(positions, &tets[t])).sum())
-        .collect();
-    let best = (0..groups.len())
-        .max_by(|&i, &j| volumes[i].total_cmp(&volumes[j]).then(j.cmp(&i)))
-        .unwrap_or(0);
-    groups
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| *i != best)
-        .map(|(_, g)| g)
-        .collect()
 }
