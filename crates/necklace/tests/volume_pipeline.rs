@@ -158,3 +158,17 @@ fn every_shared_mesh_meshes_as_a_manifold_in_both_modes() {
         }
     }
 }
+
+#[test]
+fn the_mesh_does_not_depend_on_the_thread_count() {
+    let surface = Shape::new(ShapeKind::Eight).with("res", 48.0).unwrap().mesh().unwrap();
+    let mesh_with = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| volume_mesh(&surface, Side::Outside, &VolumeOptions::default()).unwrap())
+    };
+    let (one, three) = (mesh_with(1), mesh_with(3));
+    assert_eq!(one.mesh, three.mesh);
+}
