@@ -161,7 +161,11 @@ fn every_shared_mesh_meshes_as_a_manifold_in_both_modes() {
 
 #[test]
 fn the_mesh_does_not_depend_on_the_thread_count() {
-    let surface = Shape::new(ShapeKind::Eight).with("res", 48.0).unwrap().mesh().unwrap();
+    let surface = Shape::new(ShapeKind::Eight)
+        .with("res", 48.0)
+        .unwrap()
+        .mesh()
+        .unwrap();
     let mesh_with = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

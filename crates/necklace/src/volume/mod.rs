@@ -268,6 +268,10 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     for (v, &k) in background.keys.iter().enumerate() {
         let known = tree.leaf_containing(k).and_then(|leaf| {
             let f = *centre_values.get(&leaf)?;
+            if leaf.center() == k {
+                // The leaf's own centre: its value is known already (sign exact).
+                return (f != 0.0).then_some(f);
+            }
             let half_diagonal = 0.5 * 3f64.sqrt() * leaf.size as f64 * unit;
             (f.abs() > half_diagonal * (1.0 + 1e-6))
                 .then(|| f.signum() * (f.abs() - half_diagonal).max(1e-6 * half_diagonal))
