@@ -176,3 +176,25 @@ fn the_mesh_does_not_depend_on_the_thread_count() {
     let (one, three) = (mesh_with(1), mesh_with(3));
     assert_eq!(one.mesh, three.mesh);
 }
+
+#[test]
+fn a_sphere_mesh_gives_the_papers_angle_bounds_and_its_volume() {
+    // Through the mesh-based distance (not the analytic one): uniform lattice along a
+    // smooth surface, so the paper's dihedral bounds (10.7°, 164.8°) must hold.
+    let surface = sphere(32.0, [0.0; 3]);
+    let v = volume_mesh(&surface, Side::Inside, &VolumeOptions::default()).unwrap();
+    let r = v.report();
+    let exact = surface.signed_volume();
+    assert!(
+        (r.volume - exact).abs() / exact < 0.01,
+        "{} vs {exact}",
+        r.volume
+    );
+    assert_eq!(r.euler_volume, 1);
+    assert!(
+        r.min_dihedral_deg >= 10.7 && r.max_dihedral_deg <= 164.8,
+        "{r:?}"
+    );
+    assert!(r.hausdorff_to_surface < 1e-9, "{r:?}");
+    assert_eq!(r.thin_points, 0);
+}
