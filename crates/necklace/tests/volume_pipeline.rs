@@ -143,15 +143,7 @@ fn every_shared_mesh_meshes_as_a_manifold_in_both_modes() {
             // A compact 3-manifold with boundary has χ(T) = χ(∂T) / 2.
             assert_eq!(2 * r.euler_volume, r.euler_boundary, "{what}");
             assert!(r.interior_vertices > 0, "{what}");
-            // Known limitation: the wire sphere's wires are 0.0038 of the diagonal thick,
-            // two cells of the default refinement floor (h/8), and its solid breaks into
-            // pieces; refine_levels = 4 keeps it whole but costs 1.7 M vertices.
-            let known_limit = side == Side::Inside && file.ends_with("wiresphere.obj");
-            if known_limit {
-                println!("KNOWN LIMITATION {what}: {} components", r.components);
-            } else {
-                assert_eq!(r.components, 1, "{what}: a part was lost or split off");
-            }
+            assert_eq!(r.components, 1, "{what}: a part was lost or split off");
             if side == Side::Outside {
                 assert!(r.outer_vertices > 0, "{what}");
             }

@@ -144,6 +144,9 @@ pub struct VolumeMesh {
     pub stats: StuffingStats,
 }
 
+/// Factor on α for edges no longer than h/2 (refined thin parts).
+const THIN_ALPHA_SCALE: f64 = 0.5;
+
 /// Upper bound on background lattice vertices before the mesher refuses (memory guard).
 const MAX_OCTREE_CELLS: usize = 40_000_000;
 
@@ -289,9 +292,25 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
 
     // 3. Stuffing.
     let keys = &background.keys;
-    let axis_parallel = |a: u32, b: u32| {
+    // The paper's α for axis-parallel and other edges; in cells finer than h (thin
+    // parts, at most a few cells across) half of it, since a full warp there moves a
+    // vertex by a large fraction of the part's thickness and can cut it in two.
+    let alpha = |a: u32, b: u32| {
         let (ka, kb) = (keys[a as usize], keys[b as usize]);
-        (0..3).filter(|&k| ka[k] != kb[k]).count() == 1
+        let d = [0, 1, 2].map(|k| (ka[k] - kb[k]).abs());
+        let axis_parallel = d.iter().filter(|&&x| x != 0).count() == 1;
+        let base = if axis_parallel {
+            stuffing::ALPHA_LONG
+        } else {
+            stuffing::ALPHA_SHORT
+        };
+        let length2 = d.iter().map(|&x| x * x).sum::<i64>();
+        let refined = 4 * length2 <= h_units * h_units;
+        if refined {
+            base * THIN_ALPHA_SCALE
+        } else {
+            base
+        }
     };
     let value = |p: [f64; 3]| domain.value(p);
     let crossing = |a: [f64; 3], b: [f64; 3]| domain.crossing(a, b);
@@ -300,7 +319,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         &crossing,
         positions,
         &values,
-        &axis_parallel,
+        &alpha,
         &background.tets,
     );
 

@@ -6,8 +6,9 @@
 //! every background edge whose ends have strictly opposite signs, at the root of the
 //! domain function along the edge. A cut point closer than `α · |edge|` to an end
 //! *violates* that end; each violated vertex is *warped* onto its closest violating cut
-//! point and becomes `0`, which removes the cut points of its edges (α_long for
-//! axis-parallel edges, α_short for the others). Then each background tet is filled:
+//! point and becomes `0`, which removes the cut points of its edges. The caller gives α
+//! per edge ([`ALPHA_LONG`] for axis-parallel edges, [`ALPHA_SHORT`] for the others,
+//! less in refined thin parts). Then each background tet is filled:
 //! - no `−` vertex: nothing (also when all four are `0`: such a tet lies along the
 //!   boundary, and keeping it makes edges shared by unconnected tets);
 //! - no `+` vertex: the tet itself;
@@ -57,7 +58,7 @@ pub(crate) fn stuff(
     crossing: &(dyn Fn([f64; 3], [f64; 3]) -> Option<f64> + Sync),
     mut positions: Vec<[f64; 3]>,
     values: &[f64],
-    axis_parallel: &dyn Fn(u32, u32) -> bool,
+    alpha: &dyn Fn(u32, u32) -> f64,
     tets: &[[u32; 4]],
 ) -> Stuffed {
     let n = positions.len();
@@ -130,12 +131,7 @@ pub(crate) fn stuff(
             } else {
                 1.0 - params[e]
             };
-            let alpha = if axis_parallel(a, b) {
-                ALPHA_LONG
-            } else {
-                ALPHA_SHORT
-            };
-            if t < alpha {
+            if t < alpha(a, b) {
                 let len = norm(sub(positions[b as usize], positions[a as usize]));
                 candidates.push((t * len, e));
             }
