@@ -25,6 +25,7 @@
 //! set). Entry point: [`stuff_volume`].
 
 mod background;
+mod csr;
 mod octree;
 mod repair;
 mod stuffing;

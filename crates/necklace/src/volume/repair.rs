@@ -13,6 +13,7 @@
 
 use rayon::prelude::*;
 
+use super::csr::Csr;
 use crate::geom::{cross, dot, sub};
 
 /// What the repair changed.
@@ -37,7 +38,7 @@ pub(crate) fn repair_pinches(
     interior: &[bool],
 ) -> Repair {
     let n = positions.len();
-    let (star_start, star_items) = lists(
+    let stars = Csr::new(
         n,
         tets.iter()
             .enumerate()
@@ -47,7 +48,7 @@ pub(crate) fn repair_pinches(
     // Before any drop, the boundary vertices are exactly the used non-interior ones
     // (an interior vertex has its whole star).
     let mut candidates: Vec<u32> = (0..n as u32)
-        .filter(|&v| !interior[v as usize] && star_start[v as usize] < star_start[v as usize + 1])
+        .filter(|&v| !interior[v as usize] && !stars.get(v as usize).is_empty())
         .collect();
     let mut touched: Vec<u32> = Vec::new();
 
@@ -58,8 +59,8 @@ pub(crate) fn repair_pinches(
         let mut drop: Vec<u32> = candidates
             .par_iter()
             .map_init(Scratch::default, |scratch, &v| {
-                let star: Vec<u32> = star_items
-                    [star_start[v as usize] as usize..star_start[v as usize + 1] as usize]
+                let star: Vec<u32> = stars
+                    .get(v as usize)
                     .iter()
                     .copied()
                     .filter(|&t| alive[t as usize])
@@ -87,8 +88,8 @@ pub(crate) fn repair_pinches(
     touched.sort_unstable();
     touched.dedup();
     for v in touched.into_iter().filter(|&v| interior[v as usize]) {
-        let mut faces: Vec<[u32; 3]> = star_items
-            [star_start[v as usize] as usize..star_start[v as usize + 1] as usize]
+        let mut faces: Vec<[u32; 3]> = stars
+            .get(v as usize)
             .iter()
             .filter(|&&t| alive[t as usize])
             .flat_map(|&t| faces_of(&tets[t as usize]))
@@ -139,24 +140,6 @@ fn faces_of(t: &[u32; 4]) -> [[u32; 3]; 4] {
         [s[0], s[1], s[3]],
         [s[0], s[1], s[2]],
     ]
-}
-
-/// For each of `n` keys, the items listed for it (CSR: starts and items).
-fn lists(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; n + 1];
-    for (k, _) in pairs.clone() {
-        start[k as usize + 1] += 1;
-    }
-    for i in 0..n {
-        start[i + 1] += start[i];
-    }
-    let mut fill = start.clone();
-    let mut items = vec![0u32; start[n] as usize];
-    for (k, item) in pairs {
-        items[fill[k as usize] as usize] = item;
-        fill[k as usize] += 1;
-    }
-    (start, items)
 }
 
 /// Number of fans formed by the boundary faces at `v` (faces sharing an edge at `v`).

@@ -23,6 +23,7 @@
 
 use rayon::prelude::*;
 
+use super::csr::Csr;
 use crate::geom::{cross, dot, lerp, norm, sub};
 
 /// Edge-length fractions below which a cut point warps a vertex (the paper's values for
@@ -264,35 +265,6 @@ pub(crate) fn stuff(
         warped,
         cut_points,
         inverted,
-    }
-}
-
-/// Compressed lists: for each of `n` keys, the items pushed for it (in push order).
-struct Csr {
-    start: Vec<u32>,
-    items: Vec<u32>,
-}
-
-impl Csr {
-    fn new(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> Csr {
-        let mut start = vec![0u32; n + 1];
-        for (k, _) in pairs.clone() {
-            start[k as usize + 1] += 1;
-        }
-        for i in 0..n {
-            start[i + 1] += start[i];
-        }
-        let mut fill = start.clone();
-        let mut items = vec![0u32; start[n] as usize];
-        for (k, item) in pairs {
-            items[fill[k as usize] as usize] = item;
-            fill[k as usize] += 1;
-        }
-        Csr { start, items }
-    }
-
-    fn get(&self, k: usize) -> &[u32] {
-        &self.items[self.start[k] as usize..self.start[k + 1] as usize]
     }
 }
 
