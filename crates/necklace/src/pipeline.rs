@@ -20,7 +20,7 @@ use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, dot, norm, scale, sub};
 use crate::io;
-use crate::mesh::{MeshReport, SurfaceMesh};
+use crate::mesh::{MeshReport, SurfaceMesh, Topology};
 use crate::tet::{TetMesh, VertexKind};
 use crate::volume::{self, Domain, StuffingOptions, StuffingStats};
 
@@ -145,8 +145,8 @@ pub struct VolumeResult {
     pub stats: Option<StuffingStats>,
     /// Sizing points asked for by thin parts.
     pub thin_points: usize,
-    /// Outside only: enclosed pockets (components touching no outer-sphere vertex,
-    /// gaps below the resolution) that were dropped.
+    /// Outside, connected surface only: enclosed pockets (components touching no
+    /// outer-sphere vertex, gaps below the resolution) that were dropped.
     pub dropped_pockets: usize,
     /// Largest distance of a surface-kind vertex to the input surface, divided by the
     /// bounding-box diagonal.
@@ -308,42 +308,14 @@ pub fn volume_mesh(
         }
         Mesher::Tetgen => (tetgen_mesh(surface, side, centre, radius)?, None, 0),
     };
-    // The shell around a connected surface is connected; pockets that touch no outer
-    // vertex are gaps below the lattice resolution, dropped and counted.
-    let mut dropped_pockets = 0;
-    if side == Side::Outside {
-        let (component, count) = mesh.tet_components();
-        if count > 1 {
-            let mut reaches_outer = vec![false; count];
-            for (t, tet) in mesh.tets.iter().enumerate() {
-                if tet
-                    .iter()
-                    .any(|&v| mesh.kinds[v as usize] == VertexKind::Outer)
-                {
-                    reaches_outer[component[t] as usize] = true;
-                }
-            }
-            dropped_pockets = reaches_outer.iter().filter(|&&r| !r).count();
-            let keep: Vec<bool> = component
-                .iter()
-                .map(|&c| reaches_outer[c as usize])
-                .collect();
-            mesh = mesh.retain_tets(&keep);
-        }
-    }
-
-    let surface_vertices: Vec<[f64; 3]> = mesh
-        .positions
-        .iter()
-        .zip(&mesh.kinds)
-        .filter(|(_, k)| **k == VertexKind::Surface)
-        .map(|(p, _)| *p)
-        .collect();
-    let hausdorff = distance
-        .distances(&surface_vertices)
-        .into_iter()
-        .fold(0.0, f64::max)
-        / diagonal;
+    // With several surface components a pocket may be a real cavity: keep them all.
+    let connected = Topology::new(surface).components(surface).1 == 1;
+    let dropped_pockets = if side == Side::Outside && connected {
+        drop_enclosed_pockets(&mut mesh)
+    } else {
+        0
+    };
+    let hausdorff = hausdorff_to_surface(&mesh, &distance) / diagonal;
 
     Ok(VolumeResult {
         mesh,
@@ -357,6 +329,46 @@ pub fn volume_mesh(
         hausdorff_to_surface: hausdorff,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Drop the components of a shell that reach no outer-sphere vertex: the shell around
+/// a *connected* surface is connected, so such pockets are gaps below the lattice
+/// resolution. Returns how many were dropped.
+fn drop_enclosed_pockets(mesh: &mut TetMesh) -> usize {
+    let (component, count) = mesh.tet_components();
+    if count < 2 {
+        return 0;
+    }
+    let mut reaches_outer = vec![false; count];
+    for (t, tet) in mesh.tets.iter().enumerate() {
+        if tet
+            .iter()
+            .any(|&v| mesh.kinds[v as usize] == VertexKind::Outer)
+        {
+            reaches_outer[component[t] as usize] = true;
+        }
+    }
+    let keep: Vec<bool> = component
+        .iter()
+        .map(|&c| reaches_outer[c as usize])
+        .collect();
+    *mesh = mesh.retain_tets(&keep);
+    reaches_outer.iter().filter(|&&r| !r).count()
+}
+
+/// Largest distance of a surface-kind vertex of `mesh` to the input surface.
+fn hausdorff_to_surface(mesh: &TetMesh, distance: &SurfaceDistance) -> f64 {
+    let surface_vertices: Vec<[f64; 3]> = mesh
+        .positions
+        .iter()
+        .zip(&mesh.kinds)
+        .filter(|(_, k)| **k == VertexKind::Surface)
+        .map(|(p, _)| *p)
+        .collect();
+    distance
+        .distances(&surface_vertices)
+        .into_iter()
+        .fold(0.0, f64::max)
 }
 
 #[cfg(feature = "tetgen")]
