@@ -190,3 +190,43 @@ fn a_sphere_mesh_gives_the_papers_angle_bounds_and_its_volume() {
     assert!(r.hausdorff_to_surface < 1e-9, "{r:?}");
     assert_eq!(r.thin_points, 0);
 }
+
+#[test]
+fn a_hollow_ball_keeps_its_cavity_in_both_modes() {
+    // Outer sphere of radius 1 (outward) and an inner one of radius 0.5 facing inward:
+    // the solid is the shell between them; outside it are the cavity and the space
+    // beyond, two components of the exterior mesh.
+    let outer = sphere(24.0, [0.0; 3]);
+    let mut inner = sphere(24.0, [0.0; 3]);
+    for p in &mut inner.positions {
+        for c in p.iter_mut() {
+            *c *= 0.5;
+        }
+    }
+    inner.flip_orientation();
+    let mut hollow = outer.clone();
+    let n = outer.positions.len() as u32;
+    hollow.positions.extend_from_slice(&inner.positions);
+    hollow
+        .triangles
+        .extend(inner.triangles.iter().map(|t| t.map(|v| v + n)));
+    let solid = hollow.signed_volume();
+
+    let inside = volume_mesh(&hollow, Side::Inside, &VolumeOptions::default()).unwrap();
+    assert!((inside.mesh.volume() - solid).abs() / solid < 0.02);
+    // A solid ball with a cavity: χ = 2 (like a 2-sphere thickened).
+    assert_eq!(inside.mesh.euler_characteristic(), 2);
+
+    let outside = volume_mesh(&hollow, Side::Outside, &VolumeOptions::default()).unwrap();
+    let r = outside.report();
+    assert_eq!(r.components, 2, "the cavity is kept");
+    assert_eq!(r.dropped_pockets, 0);
+    let (_, radius) = outside.sphere.unwrap();
+    let ball = 4.0 / 3.0 * PI * radius.powi(3);
+    let expected = ball - solid;
+    assert!(
+        (r.volume - expected).abs() / expected < 0.02,
+        "{} vs {expected}",
+        r.volume
+    );
+}
