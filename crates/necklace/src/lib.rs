@@ -25,6 +25,7 @@ pub mod error;
 mod geom;
 pub mod io;
 pub mod mesh;
+pub mod morse;
 pub mod pipeline;
 pub mod shapes;
 pub mod tet;

@@ -1,0 +1,138 @@
+//! Cotangent stiffness and lumped mass matrices of a tetrahedral mesh.
+//!
+//! For a tet with volume `V` and barycentric functions `φ_i`, the local stiffness is
+//! `K_ij = V ∇φ_i · ∇φ_j`, with `∇φ_i = −A_i n_i / (3V)` (`A_i`, `n_i`: area and outward
+//! unit normal of the face opposite vertex `i`); this is the classic cotangent formula
+//! `K_ij = −l_kl cot θ_kl / 6` written without angles. Summed over tets it gives the
+//! symmetric positive semidefinite `L` with `L·1 = 0` and `fᵀ L f = ∫ |∇f|²` for the
+//! piecewise-linear `f`. Local matrices are computed in parallel and summed in a fixed
+//! order, so the result does not depend on the thread count.
+
+use rayon::prelude::*;
+
+use crate::geom::{cross, dot, scale, sub};
+use crate::tet::TetMesh;
+
+/// A square sparse matrix in compressed rows, columns sorted within each row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SparseMatrix {
+    /// Number of rows (and columns).
+    pub n: usize,
+    /// Start of each row in `cols` / `vals`; `n + 1` entries.
+    pub row_start: Vec<usize>,
+    /// Column of each stored entry.
+    pub cols: Vec<u32>,
+    /// Value of each stored entry.
+    pub vals: Vec<f64>,
+}
+
+impl SparseMatrix {
+    /// Sum duplicate `(row, col, value)` triplets into a matrix (order-independent of
+    /// how the triplets were produced, as long as their order is fixed).
+    pub fn from_triplets(n: usize, mut triplets: Vec<(u32, u32, f64)>) -> SparseMatrix {
+        // Stable: equal (row, col) keep their production order, so sums are reproducible.
+        triplets.sort_by_key(|t| (t.0, t.1));
+        let mut row_start = vec![0usize; n + 1];
+        let mut cols = Vec::new();
+        let mut vals: Vec<f64> = Vec::new();
+        let mut last: Option<(u32, u32)> = None;
+        for (r, c, v) in triplets {
+            if last == Some((r, c)) {
+                if let Some(x) = vals.last_mut() {
+                    *x += v;
+                }
+            } else {
+                cols.push(c);
+                vals.push(v);
+                row_start[r as usize + 1] += 1;
+                last = Some((r, c));
+            }
+        }
+        for i in 0..n {
+            row_start[i + 1] += row_start[i];
+        }
+        SparseMatrix {
+            n,
+            row_start,
+            cols,
+            vals,
+        }
+    }
+
+    /// The stored entries of row `i` as `(column, value)`.
+    pub fn row(&self, i: usize) -> impl Iterator<Item = (u32, f64)> + '_ {
+        let range = self.row_start[i]..self.row_start[i + 1];
+        self.cols[range.clone()]
+            .iter()
+            .copied()
+            .zip(self.vals[range].iter().copied())
+    }
+
+    /// The entry at `(i, j)` (0 when not stored).
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.row(i)
+            .find(|&(c, _)| c as usize == j)
+            .map_or(0.0, |(_, v)| v)
+    }
+
+    /// `y = A x`, rows in parallel.
+    pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
+        (0..self.n)
+            .into_par_iter()
+            .map(|i| self.row(i).map(|(c, v)| v * x[c as usize]).sum())
+            .collect()
+    }
+}
+
+/// Gradients of the four barycentric functions of a tet and its (signed) volume.
+fn gradients(p: [[f64; 3]; 4]) -> ([[f64; 3]; 4], f64) {
+    let volume6 = dot(sub(p[1], p[0]), cross(sub(p[2], p[0]), sub(p[3], p[0])));
+    if volume6 == 0.0 {
+        return ([[0.0; 3]; 4], 0.0);
+    }
+    // ∇φ_i is the area vector of the face opposite i, oriented towards i, over 3V;
+    // with (j, k, l) an even permutation after i, that is (p_k − p_j) × (p_l − p_j) / 6V
+    // up to the sign fixed by the orientation.
+    let mut g = [[0.0; 3]; 4];
+    for (i, gi) in g.iter_mut().enumerate() {
+        let (j, k, l) = ((i + 1) % 4, (i + 2) % 4, (i + 3) % 4);
+        let n = cross(sub(p[k], p[j]), sub(p[l], p[j]));
+        // Point n towards vertex i.
+        let towards = if dot(n, sub(p[i], p[j])) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        *gi = scale(n, towards / volume6.abs());
+    }
+    (g, volume6 / 6.0)
+}
+
+/// The cotangent stiffness matrix `L` (positive semidefinite, `l = −Δf`).
+pub fn cotangent_stiffness(mesh: &TetMesh) -> SparseMatrix {
+    let triplets: Vec<(u32, u32, f64)> = (0..mesh.num_tets())
+        .into_par_iter()
+        .flat_map_iter(|t| {
+            let (g, volume) = gradients(mesh.corners(t));
+            let tet = mesh.tets[t];
+            let volume = volume.abs();
+            (0..16).map(move |k| {
+                let (i, j) = (k / 4, k % 4);
+                (tet[i], tet[j], volume * dot(g[i], g[j]))
+            })
+        })
+        .collect();
+    SparseMatrix::from_triplets(mesh.num_vertices(), triplets)
+}
+
+/// The lumped mass: a quarter of each tet's volume to each of its vertices.
+pub fn lumped_mass(mesh: &TetMesh) -> Vec<f64> {
+    let mut mass = vec![0.0; mesh.num_vertices()];
+    for t in 0..mesh.num_tets() {
+        let quarter = mesh.tet_volume(t).abs() / 4.0;
+        for &v in &mesh.tets[t] {
+            mass[v as usize] += quarter;
+        }
+    }
+    mass
+}

@@ -1,0 +1,11 @@
+//! The distance field, its heat smoothing and the critical points of the volume
+//! (paper sections 3 and 4.1–4.2). **In progress (issue 4)**: so far the finite-element
+//! operators the smoothing needs ([`laplacian`]).
+//!
+//! Conventions: the stiffness matrix `L` is positive semidefinite (`l = −Δf`, so the
+//! implicit heat step is `(M + τL) F' = M F`), `M` is the lumped mass (a quarter of each
+//! tet's volume to each of its vertices); lengths in the mesh's units.
+
+pub mod laplacian;
+
+pub use laplacian::{cotangent_stiffness, lumped_mass, SparseMatrix};

@@ -1,0 +1,97 @@
+//! The stiffness and mass matrices against their defining properties.
+
+use necklace::morse::{cotangent_stiffness, lumped_mass};
+use necklace::shapes::{Shape, ShapeKind};
+use necklace::volume::{stuff_volume, Domain, StuffingOptions};
+use necklace::{TetMesh, VertexKind};
+
+struct Inside(Shape);
+
+impl Domain for Inside {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        self.0.sdf(p)
+    }
+    fn boundary_kind(&self, _p: [f64; 3]) -> VertexKind {
+        VertexKind::Surface
+    }
+    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        self.0.bounds()
+    }
+}
+
+fn torus_mesh() -> TetMesh {
+    stuff_volume(
+        &Inside(Shape::new(ShapeKind::Torus)),
+        &StuffingOptions::new(0.08),
+    )
+    .unwrap()
+    .mesh
+}
+
+#[test]
+fn stiffness_is_symmetric_with_zero_row_sums() {
+    let m = torus_mesh();
+    let l = cotangent_stiffness(&m);
+    for i in 0..l.n {
+        let mut sum = 0.0;
+        let mut scale = 0.0f64;
+        for (j, v) in l.row(i) {
+            assert!(
+                (v - l.get(j as usize, i)).abs() <= 1e-12 * v.abs().max(1e-30),
+                "not symmetric"
+            );
+            sum += v;
+            scale = scale.max(v.abs());
+        }
+        assert!(sum.abs() <= 1e-12 * scale, "row {i} sums to {sum}");
+        assert!(l.get(i, i) > 0.0);
+    }
+}
+
+#[test]
+fn stiffness_is_exact_on_linear_functions() {
+    let m = torus_mesh();
+    let l = cotangent_stiffness(&m);
+    let a = [0.3, -1.2, 0.7];
+    let f: Vec<f64> = m
+        .positions
+        .iter()
+        .map(|p| a[0] * p[0] + a[1] * p[1] + a[2] * p[2] + 0.5)
+        .collect();
+    let lf = l.mul_vec(&f);
+    // Δ of a linear function is 0: only boundary rows carry (flux) terms.
+    for (i, &value) in lf.iter().enumerate() {
+        if m.kinds[i] == VertexKind::Interior {
+            assert!(value.abs() < 1e-10, "interior row {i}: {value}");
+        }
+    }
+    // fᵀ L f = ∫ |∇f|² = |a|² · volume.
+    let energy: f64 = f.iter().zip(&lf).map(|(x, y)| x * y).sum();
+    let expected = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) * m.volume();
+    assert!(
+        (energy - expected).abs() < 1e-9 * expected,
+        "{energy} vs {expected}"
+    );
+}
+
+#[test]
+fn stiffness_is_positive_semidefinite_and_mass_sums_to_volume() {
+    let m = torus_mesh();
+    let l = cotangent_stiffness(&m);
+    // A fixed pseudo-random field (LCG).
+    let mut state = 12345u64;
+    let f: Vec<f64> = (0..l.n)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect();
+    let energy: f64 = f.iter().zip(l.mul_vec(&f)).map(|(x, y)| x * y).sum();
+    assert!(energy > 0.0);
+    let mass = lumped_mass(&m);
+    let total: f64 = mass.iter().sum();
+    assert!((total - m.volume()).abs() < 1e-12 * m.volume());
+    assert!(mass.iter().all(|&x| x > 0.0));
+}
