@@ -95,3 +95,71 @@ fn stiffness_is_positive_semidefinite_and_mass_sums_to_volume() {
     assert!((total - m.volume()).abs() < 1e-12 * m.volume());
     assert!(mass.iter().all(|&x| x > 0.0));
 }
+
+mod smoothing {
+    use super::*;
+    use necklace::morse::{implicit_step, SolverOptions};
+
+    fn boundary(m: &TetMesh) -> Vec<bool> {
+        m.kinds.iter().map(|&k| k != VertexKind::Interior).collect()
+    }
+
+    #[test]
+    fn a_linear_field_with_its_boundary_values_is_a_fixed_point() {
+        let m = torus_mesh();
+        let (l, mass, fixed) = (cotangent_stiffness(&m), lumped_mass(&m), boundary(&m));
+        let f: Vec<f64> = m
+            .positions
+            .iter()
+            .map(|p| 2.0 * p[0] - p[2] + 1.0)
+            .collect();
+        let (g, report) = implicit_step(&l, &mass, &fixed, &f, 0.01, &SolverOptions::default());
+        assert!(report.converged, "{report:?}");
+        for (a, b) in f.iter().zip(&g) {
+            assert!((a - b).abs() < 1e-8, "{a} -> {b}");
+        }
+    }
+
+    #[test]
+    fn a_step_lowers_the_dirichlet_energy_and_keeps_boundary_values() {
+        let m = torus_mesh();
+        let (l, mass, fixed) = (cotangent_stiffness(&m), lumped_mass(&m), boundary(&m));
+        // A bumpy field that is zero on the boundary.
+        let f: Vec<f64> = m
+            .positions
+            .iter()
+            .zip(&fixed)
+            .map(|(p, &b)| {
+                if b {
+                    0.0
+                } else {
+                    (7.0 * p[0]).sin() * (5.0 * p[1]).cos() + 1.0
+                }
+            })
+            .collect();
+        let energy = |x: &[f64]| -> f64 { x.iter().zip(l.mul_vec(x)).map(|(a, b)| a * b).sum() };
+        let (g, report) = implicit_step(&l, &mass, &fixed, &f, 0.01, &SolverOptions::default());
+        assert!(report.converged && report.iterations > 0, "{report:?}");
+        assert!(energy(&g) < energy(&f));
+        for i in 0..f.len() {
+            if fixed[i] {
+                assert_eq!(g[i], 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn a_step_does_not_depend_on_the_thread_count() {
+        let m = torus_mesh();
+        let (l, mass, fixed) = (cotangent_stiffness(&m), lumped_mass(&m), boundary(&m));
+        let f: Vec<f64> = m.positions.iter().map(|p| p[0] * p[1] + p[2]).collect();
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| implicit_step(&l, &mass, &fixed, &f, 0.01, &SolverOptions::default()).0)
+        };
+        assert_eq!(run(1), run(3));
+    }
+}
