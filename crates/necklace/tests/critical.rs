@@ -1,44 +1,14 @@
 //! Link classification against the Morse identity: Σ (1 − χ(lower link)) over interior
 //! vertices = g − 1 inside and g outside a connected genus-g surface.
 
+mod common;
+
+use common::{Inside, Shell};
+
 use necklace::morse::{classify, VertexType};
 use necklace::shapes::{Shape, ShapeKind};
-use necklace::volume::{stuff_volume, Domain, StuffingOptions};
+use necklace::volume::{stuff_volume, StuffingOptions};
 use necklace::{TetMesh, VertexKind};
-
-struct Inside(Shape);
-
-impl Domain for Inside {
-    fn value(&self, p: [f64; 3]) -> f64 {
-        self.0.sdf(p)
-    }
-    fn boundary_kind(&self, _p: [f64; 3]) -> VertexKind {
-        VertexKind::Surface
-    }
-    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        self.0.bounds()
-    }
-}
-
-struct Shell(Shape, f64);
-
-impl Domain for Shell {
-    fn value(&self, p: [f64; 3]) -> f64 {
-        let sphere = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - self.1;
-        (-self.0.sdf(p)).max(sphere)
-    }
-    fn boundary_kind(&self, p: [f64; 3]) -> VertexKind {
-        let sphere = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - self.1;
-        if sphere.abs() < self.0.sdf(p).abs() {
-            VertexKind::Outer
-        } else {
-            VertexKind::Surface
-        }
-    }
-    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        ([-self.1; 3], [self.1; 3])
-    }
-}
 
 /// Distance to the shape's surface at every vertex (0 on the surface).
 fn distance_field(shape: &Shape, m: &TetMesh) -> Vec<f64> {

@@ -1,23 +1,13 @@
 //! The stiffness and mass matrices against their defining properties.
 
+mod common;
+
+use common::Inside;
+
 use necklace::morse::{cotangent_stiffness, lumped_mass};
 use necklace::shapes::{Shape, ShapeKind};
-use necklace::volume::{stuff_volume, Domain, StuffingOptions};
+use necklace::volume::{stuff_volume, StuffingOptions};
 use necklace::{TetMesh, VertexKind};
-
-struct Inside(Shape);
-
-impl Domain for Inside {
-    fn value(&self, p: [f64; 3]) -> f64 {
-        self.0.sdf(p)
-    }
-    fn boundary_kind(&self, _p: [f64; 3]) -> VertexKind {
-        VertexKind::Surface
-    }
-    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        self.0.bounds()
-    }
-}
 
 fn torus_mesh() -> TetMesh {
     stuff_volume(

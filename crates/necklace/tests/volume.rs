@@ -1,52 +1,14 @@
 //! Isosurface stuffing on analytic domains, against closed-form answers.
 
+mod common;
+
+use common::{Inside, Shell};
+
 use std::f64::consts::PI;
 
 use necklace::shapes::{Shape, ShapeKind};
-use necklace::volume::{stuff_volume, Domain, StuffingOptions, VolumeMesh};
+use necklace::volume::{stuff_volume, StuffingOptions, VolumeMesh};
 use necklace::{TetMesh, VertexKind};
-
-/// The inside of an analytic shape.
-struct Inside(Shape);
-
-impl Domain for Inside {
-    fn value(&self, p: [f64; 3]) -> f64 {
-        self.0.sdf(p)
-    }
-    fn boundary_kind(&self, _p: [f64; 3]) -> VertexKind {
-        VertexKind::Surface
-    }
-    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        self.0.bounds()
-    }
-}
-
-/// The shell between an analytic shape and a sphere of radius `radius` at the origin.
-struct Shell(Shape, f64);
-
-impl Domain for Shell {
-    fn value(&self, p: [f64; 3]) -> f64 {
-        let sphere = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - self.1;
-        (-self.0.sdf(p)).max(sphere)
-    }
-    fn boundary_kind(&self, p: [f64; 3]) -> VertexKind {
-        let sphere = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - self.1;
-        if sphere.abs() < self.0.sdf(p).abs() {
-            VertexKind::Outer
-        } else {
-            VertexKind::Surface
-        }
-    }
-    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        ([-self.1; 3], [self.1; 3])
-    }
-    fn spacing_near(&self, p: [f64; 3], h: f64) -> f64 {
-        match self.boundary_kind(p) {
-            VertexKind::Outer => self.1 / 8.0,
-            _ => h,
-        }
-    }
-}
 
 fn check_valid(v: &VolumeMesh) -> &TetMesh {
     let m = &v.mesh;
