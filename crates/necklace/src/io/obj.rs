@@ -75,23 +75,8 @@ impl Reader {
         }
     }
 
-    fn vertex<'a>(
-        &mut self,
-        mut tokens: impl Iterator<Item = &'a [u8]>,
-        line: usize,
-    ) -> Result<()> {
-        let mut position = [0.0; 3];
-        for (found, coordinate) in position.iter_mut().enumerate() {
-            let token = tokens.next().ok_or_else(|| {
-                Error::new(
-                    ErrorKind::Syntax,
-                    format!("vertex has {found} coordinates, expected 3"),
-                )
-                .at_line(line)
-            })?;
-            *coordinate = text::parse_coordinate(token, line)?;
-        }
-        self.positions.push(position);
+    fn vertex<'a>(&mut self, tokens: impl Iterator<Item = &'a [u8]>, line: usize) -> Result<()> {
+        self.positions.push(text::parse_position(tokens, line)?);
         Ok(())
     }
 

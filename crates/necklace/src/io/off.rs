@@ -127,19 +127,7 @@ fn parse_counts(tokens: &[&[u8]], line: usize) -> Result<(u64, u64)> {
 }
 
 fn parse_vertex(record: &[u8], line: usize) -> Result<[f64; 3]> {
-    let mut tokens = text::tokens(record);
-    let mut position = [0.0; 3];
-    for (found, coordinate) in position.iter_mut().enumerate() {
-        let token = tokens.next().ok_or_else(|| {
-            Error::new(
-                ErrorKind::Syntax,
-                format!("vertex has {found} coordinates, expected 3"),
-            )
-            .at_line(line)
-        })?;
-        *coordinate = text::parse_coordinate(token, line)?;
-    }
-    Ok(position)
+    text::parse_position(text::tokens(record), line)
 }
 
 /// Parse `n i1 .. in [colour]` into `polygon` (0-based indices, checked).

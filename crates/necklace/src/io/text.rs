@@ -73,6 +73,25 @@ pub(crate) fn parse_number(token: &[u8], line: usize) -> Result<f64> {
         })
 }
 
+/// The first three tokens as a finite position; extra tokens are left unread.
+pub(crate) fn parse_position<'a>(
+    mut tokens: impl Iterator<Item = &'a [u8]>,
+    line: usize,
+) -> Result<[f64; 3]> {
+    let mut position = [0.0; 3];
+    for (found, coordinate) in position.iter_mut().enumerate() {
+        let token = tokens.next().ok_or_else(|| {
+            Error::new(
+                ErrorKind::Syntax,
+                format!("vertex has {found} coordinates, expected 3"),
+            )
+            .at_line(line)
+        })?;
+        *coordinate = parse_coordinate(token, line)?;
+    }
+    Ok(position)
+}
+
 /// Parse a coordinate: a number that must be finite.
 pub(crate) fn parse_coordinate(token: &[u8], line: usize) -> Result<f64> {
     let value = parse_number(token, line)?;
