@@ -12,6 +12,7 @@
 
 use std::collections::HashMap;
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
@@ -165,36 +166,54 @@ impl TetMesh {
 
     /// Euler characteristic V − E + F − T over the vertices used by tets.
     pub fn euler_characteristic(&self) -> i64 {
-        let mut edges: Vec<[u32; 2]> = Vec::with_capacity(6 * self.tets.len());
-        let mut faces: Vec<[u32; 3]> = Vec::with_capacity(4 * self.tets.len());
-        let mut used = vec![false; self.num_vertices()];
-        for tet in &self.tets {
-            let mut s = *tet;
-            s.sort_unstable();
-            for &v in &s {
-                used[v as usize] = true;
-            }
-            for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
-                edges.push([s[i], s[j]]);
-            }
-            for skip in 0..4 {
-                let mut f = [0u32; 3];
-                let mut k = 0;
-                for (i, &v) in s.iter().enumerate() {
-                    if i != skip {
-                        f[k] = v;
-                        k += 1;
+        self.euler_characteristic_where(&vec![true; self.num_vertices()])
+    }
+
+    /// Euler characteristic of the full subcomplex on the vertices with `keep[v]`: the
+    /// vertices, edges, faces and tets of the mesh all of whose vertices are kept
+    /// (vertices counted only when a tet uses them). Each simplex is counted at its
+    /// lowest vertex, from that vertex's tets, in parallel.
+    pub fn euler_characteristic_where(&self, keep: &[bool]) -> i64 {
+        (0..self.num_vertices())
+            .into_par_iter()
+            .filter(|&v| keep[v] && !self.vertex_tets(v).is_empty())
+            .map_init(
+                || (Vec::new(), Vec::new()),
+                |(edges, faces): &mut (Vec<u32>, Vec<[u32; 2]>), v| {
+                    let v32 = v as u32;
+                    let kept_above = |u: u32| u > v32 && keep[u as usize];
+                    edges.clear();
+                    faces.clear();
+                    let mut tets = 0i64;
+                    for &t in self.vertex_tets(v) {
+                        let mut others = [0u32; 3];
+                        let mut k = 0;
+                        for &u in &self.tets[t as usize] {
+                            if u != v32 && k < 3 {
+                                others[k] = u;
+                                k += 1;
+                            }
+                        }
+                        others.sort_unstable();
+                        let above = others.map(kept_above);
+                        edges.extend(others.iter().zip(above).filter(|x| x.1).map(|x| *x.0));
+                        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+                            if above[a] && above[b] {
+                                faces.push([others[a], others[b]]);
+                            }
+                        }
+                        if above.iter().all(|&x| x) {
+                            tets += 1;
+                        }
                     }
-                }
-                faces.push(f);
-            }
-        }
-        edges.sort_unstable();
-        edges.dedup();
-        faces.sort_unstable();
-        faces.dedup();
-        let v = used.iter().filter(|&&u| u).count() as i64;
-        v - edges.len() as i64 + faces.len() as i64 - self.tets.len() as i64
+                    edges.sort_unstable();
+                    edges.dedup();
+                    faces.sort_unstable();
+                    faces.dedup();
+                    1 - edges.len() as i64 + faces.len() as i64 - tets
+                },
+            )
+            .sum()
     }
 
     /// Connected components of the tets (through shared vertices): a component id per

@@ -37,7 +37,7 @@ fn the_morse_sum_inside_is_genus_minus_one() {
         let m = stuff_volume(&Inside(shape.clone()), &StuffingOptions::new(h))
             .unwrap()
             .mesh;
-        let c = classify(&m, &distance_field(&shape, &m));
+        let c = classify(&m, &distance_field(&shape, &m)).unwrap();
         assert_eq!(c.morse_sum, genus - 1, "{kind}");
         assert!(
             c.count(VertexType::Maximum) >= 1,
@@ -68,7 +68,7 @@ fn the_morse_sum_outside_is_the_genus() {
         let m = stuff_volume(&Shell(shape.clone(), 2.5), &StuffingOptions::new(0.08))
             .unwrap()
             .mesh;
-        let c = classify(&m, &distance_field(&shape, &m));
+        let c = classify(&m, &distance_field(&shape, &m)).unwrap();
         assert_eq!(c.morse_sum, genus, "{kind}");
     }
 }

@@ -12,13 +12,15 @@
 //!
 //! Morse check: adding `v` to the lower-star filtration changes χ by `1 − χ(lower link)`
 //! (= (−1)^index for a non-degenerate critical point, 0 for a regular one). Since the
-//! surface comes first, the sum over interior vertices is χ(T) − χ(surface part): for a
-//! connected genus-g surface, g − 1 inside and g outside (see the issue 4 note).
-//! Entry point: [`classify`].
+//! surface comes first and the outer sphere last, the sum over interior vertices is
+//! χ(K_{S∪I}) − χ(K_S) ([`expected_morse_sum`]): for a connected genus-g surface, g − 1
+//! inside and g outside. Entry points: [`Links::new`] once per mesh, then
+//! [`Links::classify`] per field ([`classify`] does both).
 
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::error::{Error, ErrorKind, Result};
 use crate::tet::{TetMesh, VertexKind};
 
 /// The type of a vertex.
@@ -71,111 +73,190 @@ impl Classification {
 }
 
 /// Classify every interior vertex of `mesh` for the field `f` (one value per vertex).
-pub fn classify(mesh: &TetMesh, f: &[f64]) -> Classification {
-    let rank = |v: u32| match mesh.kinds[v as usize] {
-        VertexKind::Surface => 0u8,
-        VertexKind::Interior => 1,
-        VertexKind::Outer => 2,
-    };
-    let below = |a: u32, b: u32| {
-        (rank(a), f[a as usize], a)
-            .partial_cmp(&(rank(b), f[b as usize], b))
-            .is_some_and(|o| o.is_lt())
-    };
-    let classes: Vec<VertexClass> = (0..mesh.num_vertices() as u32)
-        .into_par_iter()
-        .map_init(Scratch::default, |s, v| {
-            if mesh.kinds[v as usize] != VertexKind::Interior {
-                return VertexClass {
-                    kind: VertexType::Boundary,
-                    upper: 0,
-                    lower: 0,
-                    euler_term: 0,
-                };
-            }
-            s.classify(mesh, v, &below)
-        })
+/// Builds the [`Links`] first; to classify many fields on one mesh, build them once.
+pub fn classify(mesh: &TetMesh, f: &[f64]) -> Result<Classification> {
+    Ok(Links::new(mesh)?.classify(f))
+}
+
+/// The Morse sum that the mesh's topology forces, from the lower-star filtration in
+/// our vertex order: Σ over interior vertices of `1 − χ(lower link)` =
+/// χ(K_{S∪I}) − χ(K_S), with `K_X` the full subcomplex on the vertices of kinds `X`
+/// (S surface, I interior).
+///
+/// For a 3-manifold mesh `T` whose boundary is the surface (and the outer sphere),
+/// χ(T) = χ(∂T)/2, so when `K_S` is exactly the surface and `K_{S∪I}` has the topology
+/// of `T`, the sum is `Σ_i (g_i − 1)` inside and `1 + Σ_i (g_i − 1)` outside over the
+/// surface components `i` of genus `g_i` (g − 1 and g for one component). `K_S` is more
+/// than the surface where a tet, face or edge spans surface vertices only (a thin part
+/// with no interior vertex); then the two differ, and the mesh's value is the one the
+/// classification must meet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct MorseExpectation {
+    /// χ(K_S): the full subcomplex on the surface vertices.
+    pub surface_part_euler: i64,
+    /// χ(K_{S∪I}): everything but the outer-sphere vertices' stars.
+    pub inner_part_euler: i64,
+    /// χ(K_{S∪I}) − χ(K_S).
+    pub sum: i64,
+}
+
+/// See [`MorseExpectation`].
+pub fn expected_morse_sum(mesh: &TetMesh) -> MorseExpectation {
+    let surface: Vec<bool> = mesh
+        .kinds
+        .iter()
+        .map(|&k| k == VertexKind::Surface)
         .collect();
-    let morse_sum = classes.iter().map(|c| i64::from(c.euler_term)).sum();
-    Classification { classes, morse_sum }
+    let not_outer: Vec<bool> = mesh.kinds.iter().map(|&k| k != VertexKind::Outer).collect();
+    let surface_part_euler = mesh.euler_characteristic_where(&surface);
+    let inner_part_euler = mesh.euler_characteristic_where(&not_outer);
+    MorseExpectation {
+        surface_part_euler,
+        inner_part_euler,
+        sum: inner_part_euler - surface_part_euler,
+    }
 }
 
-/// Per-thread buffers, reused from vertex to vertex (no allocation in steady state).
-#[derive(Default)]
-struct Scratch {
-    triangles: Vec<[u32; 3]>,
+/// The links of a mesh's interior vertices in local indices, built once per mesh so
+/// that classifying a field (every smoothing step) only compares values and joins
+/// small union-find sets: no sorting, no allocation per vertex.
+#[derive(Debug, Clone)]
+pub struct Links {
+    kinds: Vec<VertexKind>,
+    /// Per vertex: its range in `vertices` (empty unless interior); `n + 1` entries.
+    vertex_start: Vec<usize>,
+    /// Link vertices (global ids), sorted within each link.
     vertices: Vec<u32>,
-    edges: Vec<[u32; 2]>,
-    parent: Vec<usize>,
-    is_lower: Vec<bool>,
+    edge_start: Vec<usize>,
+    /// Link edges in local indices.
+    edges: Vec<[u16; 2]>,
+    triangle_start: Vec<usize>,
+    /// Link triangles in local indices.
+    triangles: Vec<[u16; 3]>,
 }
 
-impl Scratch {
-    fn classify(
-        &mut self,
-        mesh: &TetMesh,
-        v: u32,
-        below: &dyn Fn(u32, u32) -> bool,
-    ) -> VertexClass {
-        self.triangles.clear();
-        for &t in mesh.vertex_tets(v as usize) {
-            let tet = mesh.tets[t as usize];
-            let mut tri = [0u32; 3];
-            let mut k = 0;
-            for &u in &tet {
-                if u != v && k < 3 {
-                    tri[k] = u;
-                    k += 1;
+/// One vertex's link in local indices.
+struct Link {
+    vertices: Vec<u32>,
+    edges: Vec<[u16; 2]>,
+    triangles: Vec<[u16; 3]>,
+}
+
+impl Links {
+    /// Build the link of every interior vertex. Fails only when a vertex has more than
+    /// 65535 link vertices.
+    pub fn new(mesh: &TetMesh) -> Result<Links> {
+        let per_vertex: Vec<Option<Link>> = (0..mesh.num_vertices() as u32)
+            .into_par_iter()
+            .map(|v| {
+                if mesh.kinds[v as usize] == VertexKind::Interior {
+                    link_of(mesh, v).map(Some)
+                } else {
+                    Ok(None)
                 }
+            })
+            .collect::<Result<_>>()?;
+        let mut links = Links {
+            kinds: mesh.kinds.clone(),
+            vertex_start: vec![0],
+            vertices: Vec::new(),
+            edge_start: vec![0],
+            edges: Vec::new(),
+            triangle_start: vec![0],
+            triangles: Vec::new(),
+        };
+        for link in per_vertex.iter().map(Option::as_ref) {
+            if let Some(link) = link {
+                links.vertices.extend(&link.vertices);
+                links.edges.extend(&link.edges);
+                links.triangles.extend(&link.triangles);
             }
-            self.triangles.push(tri);
+            links.vertex_start.push(links.vertices.len());
+            links.edge_start.push(links.edges.len());
+            links.triangle_start.push(links.triangles.len());
         }
-        self.vertices.clear();
-        self.vertices.extend(self.triangles.iter().flatten());
-        self.vertices.sort_unstable();
-        self.vertices.dedup();
-        let local = |vs: &[u32], u: u32| vs.binary_search(&u).unwrap_or(0);
-        self.is_lower.clear();
-        self.is_lower
-            .extend(self.vertices.iter().map(|&u| below(u, v)));
-        self.edges.clear();
-        for tri in &self.triangles {
-            for (a, b) in [(tri[0], tri[1]), (tri[1], tri[2]), (tri[0], tri[2])] {
-                self.edges.push([a.min(b), a.max(b)]);
-            }
+        Ok(links)
+    }
+
+    /// Number of mesh vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.kinds.len()
+    }
+
+    /// Classify every interior vertex for the field `f` (one value per vertex), in
+    /// parallel; the result does not depend on the thread count.
+    pub fn classify(&self, f: &[f64]) -> Classification {
+        let classes: Vec<VertexClass> = (0..self.num_vertices())
+            .into_par_iter()
+            .map_init(Scratch::default, |s, v| {
+                if self.kinds[v] == VertexKind::Interior {
+                    self.classify_vertex(v, f, s)
+                } else {
+                    VertexClass {
+                        kind: VertexType::Boundary,
+                        upper: 0,
+                        lower: 0,
+                        euler_term: 0,
+                    }
+                }
+            })
+            .collect();
+        let morse_sum = classes.iter().map(|c| i64::from(c.euler_term)).sum();
+        Classification { classes, morse_sum }
+    }
+
+    /// Whether `a` comes below `b`: surface first, outer sphere last, else `(f, index)`.
+    fn below(&self, f: &[f64], a: usize, b: usize) -> bool {
+        let rank = |v: usize| match self.kinds[v] {
+            VertexKind::Surface => 0u8,
+            VertexKind::Interior => 1,
+            VertexKind::Outer => 2,
+        };
+        let (ra, rb) = (rank(a), rank(b));
+        if ra != rb {
+            return ra < rb;
         }
-        self.edges.sort_unstable();
-        self.edges.dedup();
+        match f[a].total_cmp(&f[b]) {
+            std::cmp::Ordering::Less => true,
+            std::cmp::Ordering::Greater => false,
+            std::cmp::Ordering::Equal => a < b,
+        }
+    }
+
+    fn classify_vertex(&self, v: usize, f: &[f64], s: &mut Scratch) -> VertexClass {
+        let vertices = &self.vertices[self.vertex_start[v]..self.vertex_start[v + 1]];
+        let edges = &self.edges[self.edge_start[v]..self.edge_start[v + 1]];
+        let triangles = &self.triangles[self.triangle_start[v]..self.triangle_start[v + 1]];
+        s.is_lower.clear();
+        s.is_lower
+            .extend(vertices.iter().map(|&u| self.below(f, u as usize, v)));
+        s.parent.clear();
+        s.parent.extend(0..vertices.len() as u16);
 
         // Components of each side, through same-side link edges.
-        self.parent.clear();
-        self.parent.extend(0..self.vertices.len());
         let mut lower_edges = 0i32;
-        for &[a, b] in &self.edges {
-            let (i, j) = (local(&self.vertices, a), local(&self.vertices, b));
-            if self.is_lower[i] == self.is_lower[j] {
-                let (ri, rj) = (root(&mut self.parent, i), root(&mut self.parent, j));
-                self.parent[ri.max(rj)] = ri.min(rj);
-                if self.is_lower[i] {
-                    lower_edges += 1;
-                }
+        for &[a, b] in edges {
+            let (i, j) = (usize::from(a), usize::from(b));
+            if s.is_lower[i] == s.is_lower[j] {
+                let (ri, rj) = (root(&mut s.parent, a), root(&mut s.parent, b));
+                s.parent[usize::from(ri.max(rj))] = ri.min(rj);
+                lower_edges += i32::from(s.is_lower[i]);
             }
         }
         let (mut upper, mut lower) = (0u32, 0u32);
-        for i in 0..self.vertices.len() {
-            if root(&mut self.parent, i) == i {
-                if self.is_lower[i] {
+        for i in 0..vertices.len() {
+            if usize::from(s.parent[i]) == i {
+                if s.is_lower[i] {
                     lower += 1;
                 } else {
                     upper += 1;
                 }
             }
         }
-        let lower_vertices = self.is_lower.iter().filter(|&&l| l).count() as i32;
-        let lower_triangles = self
-            .triangles
+        let lower_vertices = s.is_lower.iter().filter(|&&l| l).count() as i32;
+        let lower_triangles = triangles
             .iter()
-            .filter(|t| t.iter().all(|&u| self.is_lower[local(&self.vertices, u)]))
+            .filter(|t| t.iter().all(|&u| s.is_lower[usize::from(u)]))
             .count() as i32;
         let euler_lower = lower_vertices - lower_edges + lower_triangles;
         let kind = match (upper, lower) {
@@ -195,10 +276,63 @@ impl Scratch {
     }
 }
 
-fn root(p: &mut [usize], mut x: usize) -> usize {
-    while p[x] != x {
-        p[x] = p[p[x]];
-        x = p[x];
+/// The link of interior vertex `v`: the faces opposite `v` in its tets.
+fn link_of(mesh: &TetMesh, v: u32) -> Result<Link> {
+    let global: Vec<[u32; 3]> = mesh
+        .vertex_tets(v as usize)
+        .iter()
+        .map(|&t| {
+            let tet = mesh.tets[t as usize];
+            let mut tri = [0u32; 3];
+            let mut k = 0;
+            for &u in &tet {
+                if u != v && k < 3 {
+                    tri[k] = u;
+                    k += 1;
+                }
+            }
+            tri
+        })
+        .collect();
+    let mut vertices: Vec<u32> = global.iter().flatten().copied().collect();
+    vertices.sort_unstable();
+    vertices.dedup();
+    if vertices.len() > usize::from(u16::MAX) {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            format!(
+                "vertex {v} has {} link vertices (at most 65535)",
+                vertices.len()
+            ),
+        ));
+    }
+    let local = |u: u32| vertices.binary_search(&u).unwrap_or(0) as u16;
+    let triangles: Vec<[u16; 3]> = global.iter().map(|t| t.map(local)).collect();
+    let mut edges: Vec<[u16; 2]> = triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])])
+        .map(|(a, b)| [a.min(b), a.max(b)])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    Ok(Link {
+        vertices,
+        edges,
+        triangles,
+    })
+}
+
+/// Per-thread buffers, reused from vertex to vertex.
+#[derive(Default)]
+struct Scratch {
+    parent: Vec<u16>,
+    is_lower: Vec<bool>,
+}
+
+fn root(p: &mut [u16], mut x: u16) -> u16 {
+    while p[usize::from(x)] != x {
+        p[usize::from(x)] = p[usize::from(p[usize::from(x)])];
+        x = p[usize::from(x)];
     }
     x
 }
