@@ -77,10 +77,21 @@ impl SparseMatrix {
 
     /// `y = A x`, rows in parallel.
     pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
-        (0..self.n)
-            .into_par_iter()
-            .map(|i| self.row(i).map(|(c, v)| v * x[c as usize]).sum())
-            .collect()
+        let mut y = vec![0.0; self.n];
+        self.mul_vec_into(x, &mut y);
+        y
+    }
+
+    /// `y = A x` into a buffer of `n` entries, rows in parallel.
+    pub fn mul_vec_into(&self, x: &[f64], y: &mut [f64]) {
+        y.par_iter_mut().enumerate().for_each(|(i, yi)| {
+            let range = self.row_start[i]..self.row_start[i + 1];
+            *yi = self.cols[range.clone()]
+                .iter()
+                .zip(&self.vals[range])
+                .map(|(&c, &v)| v * x[c as usize])
+                .sum();
+        });
     }
 }
 
@@ -108,21 +119,54 @@ fn gradients(p: [[f64; 3]; 4]) -> ([[f64; 3]; 4], f64) {
     (g, volume6 / 6.0)
 }
 
-/// The cotangent stiffness matrix `L` (positive semidefinite, `l = −Δf`).
+/// The cotangent stiffness matrix `L` (positive semidefinite, `l = −Δf`). Rows are
+/// assembled in parallel, each from its vertex's tets in increasing tet order, so entry
+/// `(i, j)` sums the same terms in the same order as `(j, i)`: `L` is exactly symmetric
+/// and independent of the thread count.
 pub fn cotangent_stiffness(mesh: &TetMesh) -> SparseMatrix {
-    let triplets: Vec<(u32, u32, f64)> = (0..mesh.num_tets())
+    let rows: Vec<Vec<(u32, f64)>> = (0..mesh.num_vertices())
         .into_par_iter()
-        .flat_map_iter(|t| {
-            let (g, volume) = gradients(mesh.corners(t));
-            let tet = mesh.tets[t];
-            let volume = volume.abs();
-            (0..16).map(move |k| {
-                let (i, j) = (k / 4, k % 4);
-                (tet[i], tet[j], volume * dot(g[i], g[j]))
-            })
+        .map(|v| {
+            let mut entries: Vec<(u32, f64)> = Vec::with_capacity(4 * mesh.vertex_tets(v).len());
+            for &t in mesh.vertex_tets(v) {
+                let tet = mesh.tets[t as usize];
+                let (g, volume) = gradients(mesh.corners(t as usize));
+                let volume = volume.abs();
+                if let Some(i) = tet.iter().position(|&u| u as usize == v) {
+                    for (j, &u) in tet.iter().enumerate() {
+                        entries.push((u, volume * dot(g[i], g[j])));
+                    }
+                }
+            }
+            // Stable: equal columns keep tet order.
+            entries.sort_by_key(|e| e.0);
+            let mut row: Vec<(u32, f64)> = Vec::with_capacity(entries.len() / 3);
+            for (c, x) in entries {
+                match row.last_mut() {
+                    Some(last) if last.0 == c => last.1 += x,
+                    _ => row.push((c, x)),
+                }
+            }
+            row
         })
         .collect();
-    SparseMatrix::from_triplets(mesh.num_vertices(), triplets)
+    let mut row_start = Vec::with_capacity(rows.len() + 1);
+    row_start.push(0);
+    let mut cols = Vec::new();
+    let mut vals = Vec::new();
+    for row in rows {
+        for (c, x) in row {
+            cols.push(c);
+            vals.push(x);
+        }
+        row_start.push(cols.len());
+    }
+    SparseMatrix {
+        n: mesh.num_vertices(),
+        row_start,
+        cols,
+        vals,
+    }
 }
 
 /// The lumped mass: a quarter of each tet's volume to each of its vertices.

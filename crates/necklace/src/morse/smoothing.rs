@@ -1,11 +1,15 @@
-//! Implicit heat steps `(M + τL) F' = M F` with Dirichlet values (paper sec. 3.3).
+//! Implicit heat steps `(M + τL) F' = M F` with Dirichlet values (paper sec. 4.2).
 //!
 //! Fixed vertices keep their values; the free ones solve the reduced system
-//! `(M + τL)_ff F'_f = M_f F_f − τ L_fd F_d` by conjugate gradients with a Jacobi
-//! (diagonal) preconditioner, warm-started from the current field. Matrix-vector
-//! products run rows in parallel; dot products are summed sequentially, so the result
-//! does not depend on the thread count. Entry point: [`implicit_step`].
+//! `(M + τL)_ff F'_f = M_f F_f − τ L_fd F_d`, assembled once ([`HeatSolver::new`]) and
+//! solved every step ([`HeatSolver::step`]) by conjugate gradients with a Jacobi
+//! (diagonal) preconditioner, warm-started from the current field. The reduced matrix
+//! is symmetric positive definite (mass > 0 on every vertex of a tet). Matrix-vector
+//! products run rows in parallel; dot products sum fixed-size chunks in a fixed order,
+//! so the result does not depend on the thread count.
 
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::laplacian::SparseMatrix;
@@ -39,9 +43,191 @@ pub struct StepReport {
     pub converged: bool,
 }
 
+/// The reduced heat-step system of one mesh, boundary values and time step.
+#[derive(Debug, Clone)]
+pub struct HeatSolver {
+    /// Global index of each free (unknown) vertex.
+    free: Vec<u32>,
+    /// `(M + τL)_ff` in free indices.
+    matrix: SparseMatrix,
+    /// `1 / diag(matrix)`.
+    inverse_diagonal: Vec<f64>,
+    /// `M_f`.
+    mass: Vec<f64>,
+    /// `τ L_fd F_d`.
+    boundary: Vec<f64>,
+    options: SolverOptions,
+    /// The last few solutions `x` and their right-hand sides `b = A x` (up to the
+    /// tolerance), newest last: the space the next initial guess is taken from.
+    history: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+/// Solutions kept for the initial guess.
+const HISTORY: usize = 3;
+
+impl HeatSolver {
+    /// Assemble the reduced system. `stiffness` is `L` (positive semidefinite), `mass`
+    /// the lumped mass, `fixed[v]` marks Dirichlet vertices whose values are taken from
+    /// `boundary_values`.
+    pub fn new(
+        stiffness: &SparseMatrix,
+        mass: &[f64],
+        fixed: &[bool],
+        boundary_values: &[f64],
+        tau: f64,
+        options: SolverOptions,
+    ) -> HeatSolver {
+        let n = stiffness.n;
+        let free: Vec<u32> = (0..n as u32).filter(|&v| !fixed[v as usize]).collect();
+        let mut local = vec![u32::MAX; n];
+        for (i, &v) in free.iter().enumerate() {
+            local[v as usize] = i as u32;
+        }
+        let mut row_start = vec![0usize];
+        let mut cols = Vec::new();
+        let mut vals = Vec::new();
+        let mut boundary = Vec::with_capacity(free.len());
+        for &v in &free {
+            let mut from_fixed = 0.0;
+            for (c, x) in stiffness.row(v as usize) {
+                let l = local[c as usize];
+                if l == u32::MAX {
+                    from_fixed += x * boundary_values[c as usize];
+                } else {
+                    let diagonal = if c == v { mass[v as usize] } else { 0.0 };
+                    cols.push(l);
+                    vals.push(diagonal + tau * x);
+                }
+            }
+            boundary.push(tau * from_fixed);
+            row_start.push(cols.len());
+        }
+        let matrix = SparseMatrix {
+            n: free.len(),
+            row_start,
+            cols,
+            vals,
+        };
+        let inverse_diagonal = (0..free.len()).map(|i| 1.0 / matrix.get(i, i)).collect();
+        let mass = free.iter().map(|&v| mass[v as usize]).collect();
+        HeatSolver {
+            free,
+            matrix,
+            inverse_diagonal,
+            mass,
+            boundary,
+            options,
+            history: Vec::new(),
+        }
+    }
+
+    /// Number of unknowns.
+    pub fn unknowns(&self) -> usize {
+        self.free.len()
+    }
+
+    /// One step: `field` (every vertex) → the new field (fixed vertices unchanged).
+    /// The initial guess is the best combination (in the energy norm) of the current
+    /// field and the last few solutions: along a heat flow they span most of the next
+    /// one, which saves iterations.
+    pub fn step(&mut self, field: &[f64]) -> (Vec<f64>, StepReport) {
+        let f: Vec<f64> = self.free.iter().map(|&v| field[v as usize]).collect();
+        let b: Vec<f64> = (0..f.len())
+            .map(|i| self.mass[i] * f[i] - self.boundary[i])
+            .collect();
+        let guess = self.initial_guess(&b, f);
+        let (x, report) = self.solve(&b, guess);
+        let mut out = field.to_vec();
+        for (&v, &value) in self.free.iter().zip(&x) {
+            out[v as usize] = value;
+        }
+        if self.history.len() == HISTORY {
+            self.history.remove(0);
+        }
+        self.history.push((x, b));
+        (out, report)
+    }
+
+    /// Galerkin projection of `A x = b` onto the span of the stored solutions, using
+    /// their stored right-hand sides as `A x_i`; `fallback` when there is no history
+    /// or the small system is singular.
+    fn initial_guess(&self, b: &[f64], fallback: Vec<f64>) -> Vec<f64> {
+        let k = self.history.len();
+        if k == 0 {
+            return fallback;
+        }
+        // G_ij = x_i · A x_j (symmetrised), r_i = x_i · b.
+        let g = DMatrix::from_fn(k, k, |i, j| {
+            let (xi, bi) = &self.history[i];
+            let (xj, bj) = &self.history[j];
+            0.5 * (dot(xi, bj) + dot(xj, bi))
+        });
+        let r = DVector::from_fn(k, |i, _| dot(&self.history[i].0, b));
+        let scale = g.diagonal().amax();
+        let Some(y) = g
+            .lu()
+            .solve(&r)
+            .filter(|y| y.iter().all(|v| v.is_finite()) && scale > 0.0)
+        else {
+            return fallback;
+        };
+        let mut x = vec![0.0; b.len()];
+        for (i, (xi, _)) in self.history.iter().enumerate() {
+            x.par_iter_mut().zip(xi).for_each(|(x, xi)| *x += y[i] * xi);
+        }
+        x
+    }
+
+    /// Jacobi-preconditioned CG from `x`.
+    fn solve(&self, b: &[f64], mut x: Vec<f64>) -> (Vec<f64>, StepReport) {
+        let n = b.len();
+        let mut ap = vec![0.0; n];
+        self.matrix.mul_vec_into(&x, &mut ap);
+        let mut r: Vec<f64> = (0..n).map(|i| b[i] - ap[i]).collect();
+        let b_norm = dot(b, b).sqrt().max(f64::MIN_POSITIVE);
+        let mut z: Vec<f64> = (0..n).map(|i| r[i] * self.inverse_diagonal[i]).collect();
+        let mut p = z.clone();
+        let mut rz = dot(&r, &z);
+        let mut report = StepReport {
+            iterations: 0,
+            residual: dot(&r, &r).sqrt() / b_norm,
+            converged: false,
+        };
+        while report.residual > self.options.tolerance
+            && report.iterations < self.options.max_iterations
+        {
+            self.matrix.mul_vec_into(&p, &mut ap);
+            let pap = dot(&p, &ap);
+            if pap <= 0.0 || !pap.is_finite() {
+                break;
+            }
+            let alpha = rz / pap;
+            x.par_iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
+            r.par_iter_mut()
+                .zip(&ap)
+                .for_each(|(r, ap)| *r -= alpha * ap);
+            z.par_iter_mut()
+                .zip(&r)
+                .zip(&self.inverse_diagonal)
+                .for_each(|((z, r), d)| *z = r * d);
+            let rz_next = dot(&r, &z);
+            let beta = rz_next / rz;
+            rz = rz_next;
+            p.par_iter_mut()
+                .zip(&z)
+                .for_each(|(p, z)| *p = z + beta * *p);
+            report.iterations += 1;
+            report.residual = dot(&r, &r).sqrt() / b_norm;
+        }
+        report.converged = report.residual <= self.options.tolerance;
+        (x, report)
+    }
+}
+
 /// One implicit Euler step of the heat equation: returns the new field (fixed vertices
 /// unchanged) and the solver's report. `stiffness` is `L` (positive semidefinite),
-/// `mass` the lumped mass, `fixed[v]` marks Dirichlet vertices.
+/// `mass` the lumped mass, `fixed[v]` marks Dirichlet vertices (values from `field`).
+/// For many steps on one mesh, build a [`HeatSolver`] once.
 pub fn implicit_step(
     stiffness: &SparseMatrix,
     mass: &[f64],
@@ -50,90 +236,16 @@ pub fn implicit_step(
     tau: f64,
     options: &SolverOptions,
 ) -> (Vec<f64>, StepReport) {
-    let n = stiffness.n;
-    // A x = (M + τL) x on free rows, with x zero on fixed vertices.
-    let apply = |x: &[f64]| -> Vec<f64> {
-        let lx = stiffness.mul_vec(x);
-        (0..n)
-            .map(|i| {
-                if fixed[i] {
-                    0.0
-                } else {
-                    mass[i] * x[i] + tau * lx[i]
-                }
-            })
-            .collect()
-    };
-    // b = M F − τ L F_d on free rows (F_d: the field with free entries zeroed).
-    let dirichlet: Vec<f64> = (0..n)
-        .map(|i| if fixed[i] { field[i] } else { 0.0 })
-        .collect();
-    let l_dirichlet = stiffness.mul_vec(&dirichlet);
-    let b: Vec<f64> = (0..n)
-        .map(|i| {
-            if fixed[i] {
-                0.0
-            } else {
-                mass[i] * field[i] - tau * l_dirichlet[i]
-            }
-        })
-        .collect();
-    let diagonal: Vec<f64> = (0..n)
-        .map(|i| {
-            if fixed[i] {
-                1.0
-            } else {
-                mass[i] + tau * stiffness.get(i, i)
-            }
-        })
-        .collect();
-
-    // Warm start from the current field (free part).
-    let mut x: Vec<f64> = (0..n)
-        .map(|i| if fixed[i] { 0.0 } else { field[i] })
-        .collect();
-    let ax = apply(&x);
-    let mut r: Vec<f64> = (0..n).map(|i| b[i] - ax[i]).collect();
-    let b_norm = dot(&b, &b).sqrt().max(f64::MIN_POSITIVE);
-    let mut z: Vec<f64> = (0..n).map(|i| r[i] / diagonal[i]).collect();
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    let mut report = StepReport {
-        iterations: 0,
-        residual: dot(&r, &r).sqrt() / b_norm,
-        converged: false,
-    };
-    while report.residual > options.tolerance && report.iterations < options.max_iterations {
-        let ap = apply(&p);
-        let pap = dot(&p, &ap);
-        if pap <= 0.0 {
-            break;
-        }
-        let alpha = rz / pap;
-        for i in 0..n {
-            x[i] += alpha * p[i];
-            r[i] -= alpha * ap[i];
-        }
-        for i in 0..n {
-            z[i] = r[i] / diagonal[i];
-        }
-        let rz_next = dot(&r, &z);
-        let beta = rz_next / rz;
-        rz = rz_next;
-        for i in 0..n {
-            p[i] = z[i] + beta * p[i];
-        }
-        report.iterations += 1;
-        report.residual = dot(&r, &r).sqrt() / b_norm;
-    }
-    report.converged = report.residual <= options.tolerance;
-    let out = (0..n)
-        .map(|i| if fixed[i] { field[i] } else { x[i] })
-        .collect();
-    (out, report)
+    HeatSolver::new(stiffness, mass, fixed, field, tau, *options).step(field)
 }
 
-/// Sequential dot product (a fixed summation order).
+/// Dot product summed over fixed chunks in a fixed order (thread-count independent).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    const CHUNK: usize = 4096;
+    let partial: Vec<f64> = a
+        .par_chunks(CHUNK)
+        .zip(b.par_chunks(CHUNK))
+        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x * y).sum())
+        .collect();
+    partial.iter().sum()
 }

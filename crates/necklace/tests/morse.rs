@@ -1,0 +1,415 @@
+//! The smoothed distance field's critical points against shapes whose necks are known,
+//! the Morse identity, a hand-built vertex link of every type, an exact quadratic for
+//! the Hessian fit, and synthetic tracks.
+
+mod common;
+
+use common::Inside;
+use necklace::morse::{
+    analyze, classify, hessian_at, CriticalPoint, MorseOptions, MorseResult, RejectReason, Tracker,
+    VertexType,
+};
+use necklace::pipeline::{
+    critical_points, surface_morse_expected, volume_mesh, Side, VolumeOptions,
+};
+use necklace::shapes::{Shape, ShapeKind};
+use necklace::volume::{stuff_volume, StuffingOptions};
+use necklace::{ErrorKind, MeshReport, TetMesh, VertexKind};
+
+fn run(shape: &Shape, side: Side, steps: usize) -> MorseResult {
+    let surface = shape.mesh().unwrap();
+    let volume = volume_mesh(&surface, side, &VolumeOptions::default()).unwrap();
+    let options = MorseOptions {
+        steps,
+        ..MorseOptions::default()
+    };
+    let result = critical_points(&surface, &volume, &options).unwrap();
+    let expected = surface_morse_expected(&MeshReport::new(&surface), side).unwrap();
+    for s in &result.steps {
+        assert!(s.morse_ok, "{}: {s:?}", shape.kind());
+        assert_eq!(s.morse_sum, expected, "{}: {s:?}", shape.kind());
+    }
+    result
+}
+
+fn angle_deg(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d: f64 = (0..3).map(|k| a[k] * b[k]).sum();
+    let n = |v: [f64; 3]| (0..3).map(|k| v[k] * v[k]).sum::<f64>().sqrt();
+    (d.abs() / (n(a) * n(b))).min(1.0).acos().to_degrees()
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+#[test]
+fn a_sphere_inside_has_one_maximum_and_no_saddle() {
+    let r = run(&Shape::new(ShapeKind::Sphere), Side::Inside, 20);
+    assert_eq!(r.steps.len(), 11, "steps 10..=20 are classified");
+    for s in &r.steps {
+        assert_eq!(
+            (s.maxima, s.saddles1, s.saddles2, s.monkeys),
+            (1, 0, 0, 0),
+            "{s:?}"
+        );
+    }
+    assert!(r.saddles.is_empty() && r.rejected.is_empty());
+    assert!(r.rescaled, "all boundary values are 0 inside");
+    assert!(r.solver.iter().all(|s| s.converged));
+}
+
+#[test]
+fn a_dumbbell_has_one_neck_saddle_at_its_neck_across_the_axis() {
+    // Balls of radius 0.5 at x = ±0.8 joined by a neck of radius 0.15.
+    let shape = Shape::new(ShapeKind::Dumbbell)
+        .with("offset", 0.8)
+        .unwrap()
+        .with("neck", 0.15)
+        .unwrap();
+    let r = run(&shape, Side::Inside, 20);
+    assert_eq!(r.saddles.len(), 1, "{:?}", r.saddles);
+    let s = r.saddles[0];
+    assert!(distance(s.position, [0.0; 3]) < 0.05, "{s:?}");
+    assert!(angle_deg(s.normal, [1.0, 0.0, 0.0]) < 10.0, "{s:?}");
+    assert!(s.hessian.is_two_saddle());
+    assert_eq!(s.persistence, 10);
+    assert_eq!(r.steps.last().unwrap().maxima, 2, "one maximum per ball");
+}
+
+#[test]
+fn a_figure_eight_keeps_the_two_thin_sides_of_its_rings_after_50_steps() {
+    let shape = Shape::new(ShapeKind::Eight);
+    let r = run(&shape, Side::Inside, 50);
+    let last = r.steps.last().unwrap();
+    assert_eq!(last.step, 50);
+    assert_eq!(r.saddles.len(), 2, "{:?}", r.saddles);
+    // The handles' expected necks: the tube circles at the far ends of the rings.
+    let necks: Vec<[f64; 3]> = shape
+        .expected_necks()
+        .iter()
+        .filter_map(|n| n.center.filter(|c| c[0].abs() > 1.5))
+        .collect();
+    assert_eq!(necks.len(), 2);
+    for s in &r.saddles {
+        let nearest = necks
+            .iter()
+            .map(|&c| distance(c, s.position))
+            .fold(f64::INFINITY, f64::min);
+        assert!(nearest < 0.1, "{s:?} not at a thin side {necks:?}");
+        // The tube runs along y there: the cutting plane is across it.
+        assert!(angle_deg(s.normal, [0.0, 1.0, 0.0]) < 10.0, "{s:?}");
+        assert!(s.persistence >= 20, "{s:?}");
+    }
+    // Smoothing removes critical points in cancelling pairs.
+    let cancellations: usize = r.steps.iter().map(|s| s.events.cancellations).sum();
+    let deaths: usize = r.steps.iter().map(|s| s.events.deaths).sum();
+    assert!(cancellations > 0 && 2 * cancellations <= deaths);
+}
+
+#[test]
+fn a_torus_outside_has_one_saddle_in_its_hole_along_its_axis() {
+    let r = run(&Shape::new(ShapeKind::Torus), Side::Outside, 20);
+    assert!(!r.rescaled, "the outer sphere keeps non-zero values");
+    assert_eq!(r.saddles.len(), 1, "{:?}", r.saddles);
+    let s = r.saddles[0];
+    assert!(distance(s.position, [0.0; 3]) < 0.05, "{s:?}");
+    assert!(angle_deg(s.normal, [0.0, 0.0, 1.0]) < 10.0, "{s:?}");
+    // The lattice may split the saddle into a symmetric cluster; the rest of the
+    // cluster is reported as duplicates, never silently dropped.
+    for rejected in &r.rejected {
+        assert!(
+            matches!(rejected.reason, RejectReason::Duplicate { of } if of == s.vertex),
+            "{rejected:?}"
+        );
+    }
+}
+
+#[test]
+fn a_sphere_outside_has_no_neck_saddle() {
+    let r = run(&Shape::new(ShapeKind::Sphere), Side::Outside, 20);
+    assert!(r.saddles.is_empty(), "{:?}", r.saddles);
+}
+
+#[test]
+fn pretzels_of_genus_1_to_4_pass_the_morse_check_in_both_modes() {
+    for g in 1..=4 {
+        let shape = Shape::new(ShapeKind::Pretzel)
+            .with("g", g as f64)
+            .unwrap()
+            .with("res", 40.0)
+            .unwrap();
+        for side in [Side::Inside, Side::Outside] {
+            // `run` checks every step against the mesh and the surface's topology.
+            let r = run(&shape, side, 12);
+            assert_eq!(r.steps.len(), 3);
+        }
+    }
+}
+
+/// A regular icosahedron around vertex 0 at the origin: vertex 0's link is the
+/// icosahedron's 20 faces.
+fn icosahedron_star() -> (TetMesh, Vec<[u32; 2]>) {
+    let p = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut positions = vec![[0.0; 3]];
+    for a in [-1.0, 1.0] {
+        for b in [-p, p] {
+            positions.push([0.0, a, b]);
+            positions.push([a, b, 0.0]);
+            positions.push([b, 0.0, a]);
+        }
+    }
+    let near = |i: usize, j: usize| (distance(positions[i], positions[j]) - 2.0).abs() < 1e-9;
+    let mut edges = Vec::new();
+    let mut tets = Vec::new();
+    for i in 1..13 {
+        for j in i + 1..13 {
+            if near(i, j) {
+                edges.push([i as u32, j as u32]);
+                for k in j + 1..13 {
+                    if near(i, k) && near(j, k) {
+                        tets.push([0, i as u32, j as u32, k as u32]);
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!((edges.len(), tets.len()), (30, 20));
+    let mut kinds = vec![VertexKind::Interior];
+    kinds.extend([VertexKind::Surface; 12]);
+    (TetMesh::new(positions, tets, kinds).unwrap(), edges)
+}
+
+#[test]
+fn one_vertex_link_gives_every_type() {
+    let (mesh, edges) = icosahedron_star();
+    let adjacent = |a: usize, b: usize| {
+        edges
+            .iter()
+            .any(|e| (e[0] as usize, e[1] as usize) == (a.min(b), a.max(b)))
+    };
+    // Link vertices are surface-kind in this mesh, which would put them all below the
+    // centre; make them interior so the field decides.
+    let mesh = TetMesh::new(
+        mesh.positions.clone(),
+        mesh.tets.clone(),
+        vec![VertexKind::Interior; 13],
+    )
+    .unwrap();
+    let antipode = (2..13)
+        .find(|&j| distance(mesh.positions[1], mesh.positions[j]) > 3.7)
+        .unwrap();
+    let independent_triple = (1..13)
+        .flat_map(|a| (a + 1..13).flat_map(move |b| (b + 1..13).map(move |c| [a, b, c])))
+        .find(|&[a, b, c]| !adjacent(a, b) && !adjacent(a, c) && !adjacent(b, c))
+        .unwrap();
+    let field = |up: &dyn Fn(usize) -> bool| -> Vec<f64> {
+        (0..13)
+            .map(|v| match v {
+                0 => 0.0,
+                v if up(v) => 1.0,
+                _ => -1.0,
+            })
+            .collect()
+    };
+    // (name, field, type, (upper, lower) components, Euler term)
+    type Case = (&'static str, Vec<f64>, VertexType, (u32, u32), i32);
+    let cases: Vec<Case> = vec![
+        ("max", field(&|_| false), VertexType::Maximum, (0, 1), -1),
+        ("min", field(&|_| true), VertexType::Minimum, (1, 0), 1),
+        (
+            "regular",
+            (0..13)
+                .map(|v: usize| {
+                    let p = mesh.positions[v];
+                    p[0] + 0.1 * p[1] + 0.01 * p[2]
+                })
+                .collect(),
+            VertexType::Regular,
+            (1, 1),
+            0,
+        ),
+        (
+            "2-saddle",
+            field(&|v| v == 1 || v == antipode),
+            VertexType::Saddle2,
+            (2, 1),
+            1,
+        ),
+        (
+            "1-saddle",
+            field(&|v| v != 1 && v != antipode),
+            VertexType::Saddle1,
+            (1, 2),
+            -1,
+        ),
+        (
+            "monkey",
+            field(&|v| independent_triple.contains(&v)),
+            VertexType::Degenerate,
+            (3, 1),
+            // Lower link: a sphere minus three disjoint open stars, χ = −1.
+            2,
+        ),
+    ];
+    for (name, f, kind, (upper, lower), term) in cases {
+        let c = classify(&mesh, &f).unwrap().classes[0];
+        assert_eq!(c.kind, kind, "{name}");
+        assert_eq!((c.upper, c.lower), (upper, lower), "{name}");
+        assert_eq!(c.euler_term, term, "{name}");
+    }
+}
+
+#[test]
+fn the_hessian_fit_recovers_a_quadratic_exactly() {
+    let shape = Shape::new(ShapeKind::Sphere);
+    let mesh = stuff_volume(&Inside(shape), &StuffingOptions::new(0.15))
+        .unwrap()
+        .mesh;
+    // f = 3 + x − 2y + ½ (−2 x² − 1 y² + 4 z²) + 0.5 xz: a saddle-shaped Hessian.
+    let f: Vec<f64> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            3.0 + p[0] - 2.0 * p[1] - p[0] * p[0] - 0.5 * p[1] * p[1]
+                + 2.0 * p[2] * p[2]
+                + 0.5 * p[0] * p[2]
+        })
+        .collect();
+    let h = [[-2.0, 0.0, 0.5], [0.0, -1.0, 0.0], [0.5, 0.0, 4.0]];
+    let v = (0..mesh.num_vertices())
+        .find(|&v| mesh.kinds[v] == VertexKind::Interior)
+        .unwrap();
+    let fit = hessian_at(&mesh, &f, v as u32).unwrap();
+    assert!(fit.samples >= 11);
+    // Check H e = λ e for each fitted eigenpair, and the trace.
+    for k in 0..3 {
+        let e = fit.eigenvectors[k];
+        for i in 0..3 {
+            let he: f64 = (0..3).map(|j| h[i][j] * e[j]).sum();
+            assert!((he - fit.eigenvalues[k] * e[i]).abs() < 1e-8, "{fit:?}");
+        }
+    }
+    let trace: f64 = fit.eigenvalues.iter().sum();
+    assert!((trace - 1.0).abs() < 1e-8);
+    assert!(fit.is_two_saddle());
+    let p = mesh.positions[v];
+    let gradient = [
+        1.0 - 2.0 * p[0] + 0.5 * p[2],
+        -2.0 - p[1],
+        4.0 * p[2] + 0.5 * p[0],
+    ];
+    for (fitted, exact) in fit.gradient.iter().zip(gradient) {
+        assert!((fitted - exact).abs() < 1e-8, "{fit:?}");
+    }
+}
+
+#[test]
+fn tracks_move_are_born_and_cancel() {
+    let point = |vertex, kind, x: f64| CriticalPoint {
+        vertex,
+        kind,
+        position: [x, 0.0, 0.0],
+        radius: 0.5,
+    };
+    let mut tracker = Tracker::new();
+    // Step 10: a maximum and a 2-saddle close together, and a far maximum.
+    let e = tracker.advance(
+        10,
+        &[
+            point(1, VertexType::Maximum, 0.0),
+            point(2, VertexType::Saddle2, 0.3),
+            point(3, VertexType::Maximum, 5.0),
+        ],
+    );
+    assert_eq!((e.births, e.deaths, e.moves), (3, 0, 0));
+    // Step 11: the far maximum moves a little, a 1-saddle appears far away.
+    let e = tracker.advance(
+        11,
+        &[
+            point(1, VertexType::Maximum, 0.0),
+            point(2, VertexType::Saddle2, 0.3),
+            point(4, VertexType::Maximum, 5.2),
+            point(9, VertexType::Saddle1, 9.0),
+        ],
+    );
+    assert_eq!((e.births, e.deaths, e.moves, e.cancellations), (1, 0, 1, 0));
+    // Step 12: the close pair (index 2 and 3) cancels.
+    let e = tracker.advance(
+        12,
+        &[
+            point(4, VertexType::Maximum, 5.2),
+            point(9, VertexType::Saddle1, 9.0),
+        ],
+    );
+    assert_eq!((e.births, e.deaths, e.moves, e.cancellations), (0, 2, 0, 1));
+    let t = &tracker.tracks;
+    assert_eq!(t.len(), 4);
+    assert_eq!(
+        (t[0].alive, t[0].persistence(), t[0].cancelled_with),
+        (false, 1, Some(1))
+    );
+    assert_eq!((t[2].alive, t[2].persistence(), t[2].moves), (true, 2, 1));
+    assert_eq!((t[3].born, t[3].persistence()), (11, 1));
+}
+
+#[test]
+fn the_result_does_not_depend_on_the_thread_count() {
+    let surface = Shape::new(ShapeKind::Eight)
+        .with("res", 40.0)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    let volume = volume_mesh(&surface, Side::Outside, &VolumeOptions::default()).unwrap();
+    let with = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut r = critical_points(&surface, &volume, &MorseOptions::default()).unwrap();
+                r.timings = Default::default();
+                r
+            })
+    };
+    assert_eq!(with(1), with(3));
+}
+
+#[test]
+fn bad_fields_and_options_are_errors() {
+    let shape = Shape::new(ShapeKind::Sphere);
+    let mesh = stuff_volume(&Inside(shape), &StuffingOptions::new(0.3))
+        .unwrap()
+        .mesh;
+    let n = mesh.num_vertices();
+    let ok = MorseOptions::default();
+    let mut nan = vec![0.0; n];
+    nan[n / 2] = f64::NAN;
+    let cases: Vec<(Vec<f64>, MorseOptions)> = vec![
+        (vec![0.0; n - 1], ok),
+        (nan, ok),
+        (vec![0.0; n], MorseOptions { tau: 0.0, ..ok }),
+        (vec![0.0; n], MorseOptions { steps: 5, ..ok }),
+        (
+            vec![0.0; n],
+            MorseOptions {
+                initial_steps: 0,
+                ..ok
+            },
+        ),
+        (
+            vec![0.0; n],
+            MorseOptions {
+                track_radius: f64::NAN,
+                ..ok
+            },
+        ),
+    ];
+    for (field, options) in cases {
+        let err = analyze(&mesh, &field, &options).unwrap_err();
+        assert_eq!(err.kind(), ErrorKind::InvalidArgument, "{err}");
+        assert!(!err.to_string().contains('\n'));
+    }
+    // A zero field is a valid (if featureless) input.
+    let r = analyze(&mesh, &vec![0.0; n], &ok).unwrap();
+    assert!(r.steps.iter().all(|s| s.morse_ok));
+}
