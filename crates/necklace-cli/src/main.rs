@@ -11,6 +11,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use necklace::morse::MorseOptions;
 use necklace::pipeline::{self, Mesher, Side, VolumeOptions};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::{io, MeshReport};
@@ -53,6 +54,28 @@ enum Command {
         #[arg(long, value_enum, default_value = "stuffing")]
         mesher: MesherArg,
         /// Output tet mesh (.vtu, .mesh, .node or .msh).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Find the critical points of the smoothed distance field inside a surface (or,
+    /// with --exterior, in the shell around it) and the 2-saddles that mark necks.
+    Critical {
+        /// The closed surface mesh.
+        mesh: PathBuf,
+        /// Work in the outside shell (tunnels) instead of the inside (handles).
+        #[arg(long)]
+        exterior: bool,
+        /// Last smoothing step N (classification runs from step 10 to N).
+        #[arg(long, default_value_t = 20)]
+        steps: usize,
+        /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
+        #[arg(long)]
+        h: Option<f64>,
+        /// Write the critical points at step N (with type, selected, persistence and
+        /// colours) as a PLY point cloud.
         #[arg(short, long)]
         output: Option<PathBuf>,
         /// Print one JSON object instead of text.
@@ -135,6 +158,24 @@ fn run(cli: Cli) -> Result<String> {
             };
             volume(mesh, exterior, &options, output, json)
         }
+        Command::Critical {
+            mesh,
+            exterior,
+            steps,
+            h,
+            output,
+            json,
+        } => {
+            let volume = VolumeOptions {
+                h,
+                ..VolumeOptions::default()
+            };
+            let morse = MorseOptions {
+                steps,
+                ..MorseOptions::default()
+            };
+            critical(mesh, exterior, &volume, &morse, output, json)
+        }
         Command::Shape {
             name,
             params,
@@ -160,14 +201,110 @@ fn info(path: PathBuf, json: bool) -> Result<String> {
     }
 }
 
-fn volume(
+fn critical(
     path: PathBuf,
     exterior: bool,
-    options: &VolumeOptions,
+    volume_options: &VolumeOptions,
+    options: &MorseOptions,
     output: Option<PathBuf>,
     json: bool,
 ) -> Result<String> {
-    let (surface, surface_report, flipped) = pipeline::orient_for_volume(io::read_mesh(&path)?);
+    let (surface, surface_report) = read_for_volume(&path)?;
+    let side = if exterior {
+        Side::Outside
+    } else {
+        Side::Inside
+    };
+    let volume = pipeline::volume_mesh(&surface, side, volume_options)?;
+    let result = pipeline::critical_points(&surface, &volume, options)?;
+    for step in result.morse_failures() {
+        eprintln!(
+            "necklace: MORSE CHECK FAILED at step {}: sum {} != expected {} ({} maxima, {} 1-saddles, {} 2-saddles, {} monkeys)",
+            step.step, step.morse_sum, step.morse_expected, step.maxima, step.saddles1, step.saddles2, step.monkeys
+        );
+    }
+    if let Some(output) = &output {
+        io::write_point_cloud(output, &pipeline::critical_point_cloud(&result))?;
+    }
+    let report = pipeline::CriticalReport {
+        side,
+        volume: volume.report(),
+        surface_morse_expected: pipeline::surface_morse_expected(&surface_report, side),
+        morse: &result,
+    };
+    if let Some(expected) = report.surface_morse_expected {
+        let mesh = result.morse_expected;
+        if expected != mesh.sum {
+            eprintln!(
+                "necklace: note: the surface's genus predicts a Morse sum of {expected}, the volume mesh's topology {}: chi of its surface part {}, of all but the outer sphere {} (thin parts without interior vertices, or sub-resolution features; --h smaller may help)",
+                mesh.sum, mesh.surface_part_euler, mesh.inner_part_euler
+            );
+        }
+    }
+    if json {
+        return Ok(serde_json::to_string_pretty(&report)? + "\n");
+    }
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{} ({:?}): {} unknowns, tau {:.3e}, {:.2} s assembly, {:.2} s smoothing, {:.2} s classification",
+        path.display(),
+        side,
+        result.unknowns,
+        result.tau,
+        result.timings.assembly,
+        result.timings.smoothing,
+        result.timings.classification
+    );
+    let _ = writeln!(
+        out,
+        "step  maxima  1-saddles  2-saddles  monkeys  morse sum (expected)"
+    );
+    for s in &result.steps {
+        let _ = writeln!(
+            out,
+            "{:>4}  {:>6}  {:>9}  {:>9}  {:>7}  {:>4} ({}){}",
+            s.step,
+            s.maxima,
+            s.saddles1,
+            s.saddles2,
+            s.monkeys,
+            s.morse_sum,
+            s.morse_expected,
+            if s.morse_ok { "" } else { "  MISMATCH" }
+        );
+    }
+    let _ = writeln!(out, "{} neck 2-saddles:", result.saddles.len());
+    for s in &result.saddles {
+        let _ = writeln!(
+            out,
+            "  at ({:.4}, {:.4}, {:.4})  normal ({:.3}, {:.3}, {:.3})  persistence {}  hessian ({:.3e}, {:.3e}, {:.3e})",
+            s.position[0], s.position[1], s.position[2],
+            s.normal[0], s.normal[1], s.normal[2],
+            s.persistence,
+            s.hessian.eigenvalues[0], s.hessian.eigenvalues[1], s.hessian.eigenvalues[2]
+        );
+    }
+    let _ = writeln!(out, "{} 2-saddles not selected:", result.rejected.len());
+    for r in &result.rejected {
+        let _ = writeln!(
+            out,
+            "  at ({:.4}, {:.4}, {:.4})  {}",
+            r.position[0],
+            r.position[1],
+            r.position[2],
+            serde_json::to_string(&r.reason)?
+        );
+    }
+    if let Some(output) = output {
+        let _ = writeln!(out, "critical points -> {}", output.display());
+    }
+    Ok(out)
+}
+
+/// Read a mesh and orient it for volume meshing, warning about what is unusual.
+fn read_for_volume(path: &PathBuf) -> Result<(necklace::SurfaceMesh, MeshReport)> {
+    let (surface, surface_report, flipped) = pipeline::orient_for_volume(io::read_mesh(path)?);
     // The mesher follows the winding number, so open or self-intersecting input is
     // meshed as the solid it bounds; say what is unusual about it.
     for problem in surface_report.problems() {
@@ -179,6 +316,17 @@ fn volume(
             path.display()
         );
     }
+    Ok((surface, surface_report))
+}
+
+fn volume(
+    path: PathBuf,
+    exterior: bool,
+    options: &VolumeOptions,
+    output: Option<PathBuf>,
+    json: bool,
+) -> Result<String> {
+    let (surface, _) = read_for_volume(&path)?;
     let side = if exterior {
         Side::Outside
     } else {

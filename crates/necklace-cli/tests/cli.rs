@@ -177,3 +177,66 @@ fn volume_json_has_the_documented_fields_and_writes_the_mesh() {
     assert_eq!(out.status.code(), Some(2));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn critical_json_has_the_documented_fields_and_writes_the_points() {
+    let dir = temp_dir("critical");
+    let mesh = dir.join("dumbbell.obj");
+    let points = dir.join("points.ply");
+    let out = necklace(&["shape", "dumbbell", "-o", mesh.to_str().unwrap()]);
+    assert!(out.status.success());
+    let out = necklace(&[
+        "critical",
+        mesh.to_str().unwrap(),
+        "--steps",
+        "12",
+        "--json",
+        "-o",
+        points.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let steps = json["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 3, "steps 10, 11, 12");
+    for step in steps {
+        for field in [
+            "step",
+            "maxima",
+            "saddles1",
+            "saddles2",
+            "monkeys",
+            "morse_sum",
+            "morse_expected",
+            "morse_ok",
+        ] {
+            assert!(!step[field].is_null(), "{field} in {step}");
+        }
+        assert_eq!(step["morse_ok"], true);
+        assert_eq!(step["morse_sum"], -1, "genus 0 inside: g − 1");
+    }
+    let saddles = json["saddles"].as_array().unwrap();
+    assert_eq!(saddles.len(), 1, "{saddles:?}");
+    for field in ["position", "normal", "persistence", "hessian"] {
+        assert!(!saddles[0][field].is_null(), "{field}");
+    }
+    assert_eq!(json["surface_morse_expected"], -1);
+    // The point cloud is a PLY with the critical points (2 maxima and the saddle).
+    let ply = std::fs::read(&points).unwrap();
+    let header = String::from_utf8_lossy(&ply[..ply.len().min(400)]).to_string();
+    assert!(
+        header.starts_with("ply\n") && header.contains("element vertex 3\n"),
+        "{header}"
+    );
+    assert!(header.contains("property double persistence"));
+
+    let out = necklace(&["critical", mesh.to_str().unwrap(), "--steps", "5"]);
+    assert_eq!(out.status.code(), Some(2), "steps below the initial 10");
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr).trim().lines().count(),
+        1
+    );
+}

@@ -1,10 +1,9 @@
 //! Volume-meshing benchmark: every shared mesh in both modes at the default spacing,
 //! then a series at three spacings on one model (cost per tet should stay flat).
 //!
-//! Run: `cargo bench -p necklace --bench volume [-- MESH_DIR]` (default
+//! Run: `cargo bench -p necklace --bench volume [-- MESH_DIR] [--only NAME]` (default
 //! `../shared/data/meshes` beside the repository).
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use necklace::pipeline::{orient_for_volume, volume_mesh, Side, VolumeOptions};
@@ -24,23 +23,12 @@ fn run(surface: &SurfaceMesh, side: Side, h: Option<f64>) -> (usize, usize, f64)
     )
 }
 
+mod common;
+
 fn main() {
-    let dir = std::env::args()
-        .skip(1)
-        .find(|a| !a.starts_with('-'))
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes")
-        });
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        println!("no mesh folder at {}", dir.display());
+    let Some(files) = common::shared_meshes() else {
         return;
     };
-    let mut files: Vec<PathBuf> = entries
-        .map(|e| e.expect("directory entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e != "tsv" && e != "md"))
-        .collect();
-    files.sort();
     println!("threads: {}", rayon::current_num_threads());
     println!("| model | mode | vertices | tets | seconds |");
     println!("|---|---|---:|---:|---:|");
@@ -55,8 +43,8 @@ fn main() {
         }
     }
 
-    let model = dir.join("bunny.off");
-    if let Ok(mesh) = io::read_mesh(&model) {
+    let model = files.iter().find(|f| f.ends_with("bunny.off"));
+    if let Some(mesh) = model.and_then(|m| io::read_mesh(m).ok()) {
         let (surface, _, _) = orient_for_volume(mesh);
         let diagonal = surface.bbox_diagonal();
         println!("\nseries on bunny.off (outside shell):");

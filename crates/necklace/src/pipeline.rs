@@ -9,7 +9,10 @@
 //! - [`volume_mesh`] builds the tet mesh of the inside ([`Side::Inside`]) or of the shell
 //!   between the surface and a bounding sphere ([`Side::Outside`]): it wraps the surface's
 //!   signed distance (`distance`) as a `volume::Domain`, with thin-part sizing from ray
-//!   casts, and calls the stuffing mesher (`volume`).
+//!   casts, and calls the stuffing mesher (`volume`);
+//! - [`critical_points`] computes the distance field on that mesh ([`distance_field`],
+//!   through `distance`) and hands it to `morse` for smoothing, classification,
+//!   tracking and saddle selection.
 
 use std::path::Path;
 use std::time::Instant;
@@ -21,6 +24,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, dot, norm, scale, sub};
 use crate::io;
 use crate::mesh::{MeshReport, SurfaceMesh, Topology};
+use crate::morse::{self, MorseOptions, MorseResult, VertexType};
 use crate::tet::{TetMesh, VertexKind};
 use crate::volume::{self, Domain, StuffingOptions, StuffingStats};
 
@@ -329,6 +333,98 @@ pub fn volume_mesh(
         hausdorff_to_surface: hausdorff,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The distance field of the method (paper sec. 3): the exact distance from every
+/// vertex of `mesh` to `surface`, 0 on surface-kind vertices. Outer-sphere vertices keep
+/// their true distance (a Dirichlet value that lets the field keep rising to the
+/// sphere; setting them to 0 would make a ridge of spurious critical points halfway
+/// out).
+pub fn distance_field(surface: &SurfaceMesh, mesh: &TetMesh) -> Vec<f64> {
+    let distance = SurfaceDistance::new(surface);
+    let mut f = distance.distances(&mesh.positions);
+    for (value, kind) in f.iter_mut().zip(&mesh.kinds) {
+        if *kind == VertexKind::Surface {
+            *value = 0.0;
+        }
+    }
+    f
+}
+
+/// The critical points of one side: the distance field of `volume`'s mesh to
+/// `surface`, smoothed, classified, tracked, and its neck 2-saddles selected
+/// (`morse::analyze`).
+pub fn critical_points(
+    surface: &SurfaceMesh,
+    volume: &VolumeResult,
+    options: &MorseOptions,
+) -> Result<MorseResult> {
+    let field = distance_field(surface, &volume.mesh);
+    morse::analyze(&volume.mesh, &field, options)
+}
+
+/// What `necklace critical --json` prints: the volume mesh's summary and the Morse
+/// stage's result, with what the input surface's topology predicts for the Morse sum.
+#[derive(Debug, Clone, Serialize)]
+pub struct CriticalReport<'a> {
+    /// Which side.
+    pub side: Side,
+    /// The volume mesh the field lives on.
+    pub volume: VolumeReport,
+    /// `Σ_i (g_i − 1)` inside, one more outside, over the input surface's components:
+    /// the Morse sum when the volume mesh has the surface's topology (`None` when a
+    /// component's genus is unknown). Each step's `morse_expected` comes from the mesh
+    /// itself; the two differ when the mesher changed the topology (see `volume`).
+    pub surface_morse_expected: Option<i64>,
+    /// Smoothing, per-step counts and checks, selected and rejected 2-saddles.
+    #[serde(flatten)]
+    pub morse: &'a MorseResult,
+}
+
+/// The Morse sum a surface's topology predicts for one side (see
+/// [`CriticalReport::surface_morse_expected`]).
+pub fn surface_morse_expected(report: &MeshReport, side: Side) -> Option<i64> {
+    let mut sum = i64::from(side == Side::Outside);
+    for component in &report.component_details {
+        sum += component.genus? - 1;
+    }
+    Some(sum)
+}
+
+/// The critical points of a Morse result as a point cloud: every critical point at the
+/// last step with its `type` (0 minimum, 1 1-saddle, 2 2-saddle, 3 maximum, 4
+/// degenerate), `selected` (1 for the selected 2-saddles) and `persistence` (steps
+/// survived); colours blue maxima, red 2-saddles, green 1-saddles, black the rest, and
+/// yellow the selected 2-saddles.
+pub fn critical_point_cloud(result: &MorseResult) -> io::PointCloud {
+    let mut cloud = io::PointCloud::default();
+    let mut kinds = Vec::new();
+    let mut selected = Vec::new();
+    let mut persistence = Vec::new();
+    let mut colors = Vec::new();
+    for track in result.tracks.iter().filter(|t| t.alive) {
+        let is_selected = result.saddles.iter().any(|s| s.vertex == track.vertex);
+        let (code, color) = match track.kind {
+            VertexType::Minimum => (0.0, [0, 0, 0]),
+            VertexType::Saddle1 => (1.0, [0, 160, 0]),
+            VertexType::Saddle2 if is_selected => (2.0, [255, 210, 0]),
+            VertexType::Saddle2 => (2.0, [220, 0, 0]),
+            VertexType::Maximum => (3.0, [0, 60, 220]),
+            _ => (4.0, [0, 0, 0]),
+        };
+        cloud.positions.push(track.position);
+        kinds.push(code);
+        selected.push(if is_selected { 1.0 } else { 0.0 });
+        persistence.push(track.persistence() as f64);
+        colors.push(color);
+    }
+    cloud.scalars = vec![
+        ("type".into(), kinds),
+        ("selected".into(), selected),
+        ("persistence".into(), persistence),
+    ];
+    cloud.colors = Some(colors);
+    cloud
 }
 
 /// Drop the components of a shell that reach no outer-sphere vertex: the shell around

@@ -132,6 +132,49 @@ pub fn read_mesh_bytes(data: &[u8], format: Format) -> Result<SurfaceMesh> {
     }
 }
 
+/// Points with per-point scalar fields and optional colours (critical points, saddles),
+/// written as a binary PLY point cloud by [`write_point_cloud`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PointCloud {
+    /// Positions.
+    pub positions: Vec<[f64; 3]>,
+    /// Named per-point values (`name`, one value per point); names must be PLY words.
+    pub scalars: Vec<(String, Vec<f64>)>,
+    /// Optional RGB colour per point.
+    pub colors: Option<Vec<[u8; 3]>>,
+}
+
+/// Write a point cloud as binary little-endian PLY (the extension must be `.ply`).
+pub fn write_point_cloud(path: impl AsRef<Path>, points: &PointCloud) -> Result<()> {
+    let path = path.as_ref();
+    if Format::from_extension(path) != Some(Format::Ply) {
+        return Err(Error::new(
+            ErrorKind::UnknownFormat,
+            "point clouds are written as PLY: use a .ply file name",
+        )
+        .in_file(path));
+    }
+    let n = points.positions.len();
+    let bad_name = |name: &str| name.is_empty() || name.contains(char::is_whitespace);
+    if let Some((name, values)) = points
+        .scalars
+        .iter()
+        .find(|(name, values)| values.len() != n || bad_name(name))
+    {
+        return Err(Error::invalid_argument(format!(
+            "point field '{name}' has {} values for {n} points (or is not a single word)",
+            values.len()
+        )));
+    }
+    if points.colors.as_ref().is_some_and(|c| c.len() != n) {
+        return Err(Error::invalid_argument("one colour per point is needed"));
+    }
+    let mut out = Vec::new();
+    ply::write_points(points, &mut out);
+    std::fs::write(path, out)
+        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+}
+
 /// Write a mesh; the format comes from the extension (OBJ, OFF or PLY).
 pub fn write_mesh(path: impl AsRef<Path>, mesh: &SurfaceMesh) -> Result<()> {
     let path = path.as_ref();

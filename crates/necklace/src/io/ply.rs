@@ -28,6 +28,7 @@
 //! Writing: binary little-endian, `double` x/y/z and `list uchar uint vertex_indices`.
 
 use super::text;
+use super::PointCloud;
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::SurfaceMesh;
 
@@ -672,6 +673,34 @@ pub(crate) fn write(mesh: &SurfaceMesh, out: &mut Vec<u8>) {
         out.push(3);
         for i in triangle {
             out.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+}
+
+/// Binary PLY point cloud: `x y z` (double), one double property per named scalar
+/// field, and `red green blue` (uchar) when colours are given.
+pub(crate) fn write_points(points: &PointCloud, out: &mut Vec<u8>) {
+    let mut header = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment written by necklace\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\n",
+        points.positions.len()
+    );
+    for (name, _) in &points.scalars {
+        header.push_str(&format!("property double {name}\n"));
+    }
+    if points.colors.is_some() {
+        header.push_str("property uchar red\nproperty uchar green\nproperty uchar blue\n");
+    }
+    header.push_str("end_header\n");
+    out.extend_from_slice(header.as_bytes());
+    for (i, position) in points.positions.iter().enumerate() {
+        for c in position {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+        for (_, values) in &points.scalars {
+            out.extend_from_slice(&values[i].to_le_bytes());
+        }
+        if let Some(colors) = &points.colors {
+            out.extend_from_slice(&colors[i]);
         }
     }
 }
