@@ -71,6 +71,9 @@ enum Command {
         /// Last smoothing step N (classification runs from step 10 to N).
         #[arg(long, default_value_t = 20)]
         steps: usize,
+        /// Heat time step in units where the bounding box's longest side is 1.
+        #[arg(long, default_value_t = 0.01)]
+        tau: f64,
         /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
         #[arg(long)]
         h: Option<f64>,
@@ -162,6 +165,7 @@ fn run(cli: Cli) -> Result<String> {
             mesh,
             exterior,
             steps,
+            tau,
             h,
             output,
             json,
@@ -172,6 +176,7 @@ fn run(cli: Cli) -> Result<String> {
             };
             let morse = MorseOptions {
                 steps,
+                tau,
                 ..MorseOptions::default()
             };
             critical(mesh, exterior, &volume, &morse, output, json)

@@ -7,12 +7,15 @@
 //! ## Tour
 //! - [`mesh`]: [`SurfaceMesh`], the plain data every stage starts from, its topology and
 //!   its validity report ([`MeshReport`]).
-//! - [`io`]: reading OBJ, OFF, PLY and STL; writing OBJ, OFF and binary PLY; tet meshes
-//!   in TetGen, Medit, Gmsh and VTU formats.
+//! - [`io`]: reading OBJ, OFF, PLY and STL; writing OBJ, OFF and binary PLY (meshes and
+//!   point clouds); tet meshes in TetGen, Medit, Gmsh and VTU formats.
 //! - [`tet`]: [`TetMesh`], the volume mesh every volume stage passes along.
 //! - [`distance`]: exact distance, winding number and rays against a surface.
 //! - [`volume`]: isosurface stuffing (Labelle & Shewchuk 2007) of an implicit region on
 //!   a graded BCC lattice; the paper's "preprocessing" (sec. 4) without TetGen.
+//! - [`morse`]: the smoothed distance field on a tet mesh, its critical points by link
+//!   classification (with the Morse check), their tracking under smoothing, and the
+//!   2-saddles that mark necks with their Hessian and cutting-plane normal (sec. 4.1–4.2).
 //! - [`shapes`]: analytic test shapes (signed distance functions meshed by marching
 //!   tetrahedra) with their known necks: the ground truth of the test suite.
 //! - [`pipeline`]: the only module that composes the others.

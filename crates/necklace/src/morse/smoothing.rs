@@ -178,14 +178,17 @@ impl HeatSolver {
         x
     }
 
-    /// Jacobi-preconditioned CG from `x`.
+    /// Jacobi-preconditioned CG from `x`. Each iteration makes three passes over the
+    /// vectors: `q = A p` with `p · q`; the updates of `x`, `r`, `z` with `r · z` and
+    /// `r · r`; and `p = z + β p`. Sums are taken over fixed chunks in a fixed order.
     fn solve(&self, b: &[f64], mut x: Vec<f64>) -> (Vec<f64>, StepReport) {
         let n = b.len();
-        let mut ap = vec![0.0; n];
-        self.matrix.mul_vec_into(&x, &mut ap);
-        let mut r: Vec<f64> = (0..n).map(|i| b[i] - ap[i]).collect();
+        let d = &self.inverse_diagonal;
+        let mut q = vec![0.0; n];
+        self.matrix.mul_vec_into(&x, &mut q);
+        let mut r: Vec<f64> = (0..n).map(|i| b[i] - q[i]).collect();
         let b_norm = dot(b, b).sqrt().max(f64::MIN_POSITIVE);
-        let mut z: Vec<f64> = (0..n).map(|i| r[i] * self.inverse_diagonal[i]).collect();
+        let mut z: Vec<f64> = (0..n).map(|i| r[i] * d[i]).collect();
         let mut p = z.clone();
         let mut rz = dot(&r, &z);
         let mut report = StepReport {
@@ -196,31 +199,67 @@ impl HeatSolver {
         while report.residual > self.options.tolerance
             && report.iterations < self.options.max_iterations
         {
-            self.matrix.mul_vec_into(&p, &mut ap);
-            let pap = dot(&p, &ap);
-            if pap <= 0.0 || !pap.is_finite() {
+            let pq = self.mul_vec_dot(&p, &mut q);
+            if pq <= 0.0 || !pq.is_finite() {
                 break;
             }
-            let alpha = rz / pap;
-            x.par_iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
-            r.par_iter_mut()
-                .zip(&ap)
-                .for_each(|(r, ap)| *r -= alpha * ap);
-            z.par_iter_mut()
-                .zip(&r)
-                .zip(&self.inverse_diagonal)
-                .for_each(|((z, r), d)| *z = r * d);
-            let rz_next = dot(&r, &z);
+            let alpha = rz / pq;
+            let sums: Vec<(f64, f64)> = x
+                .par_chunks_mut(CHUNK)
+                .zip(r.par_chunks_mut(CHUNK))
+                .zip(z.par_chunks_mut(CHUNK))
+                .enumerate()
+                .map(|(c, ((xc, rc), zc))| {
+                    let start = c * CHUNK;
+                    let (mut rz, mut rr) = (0.0, 0.0);
+                    for k in 0..xc.len() {
+                        let i = start + k;
+                        xc[k] += alpha * p[i];
+                        rc[k] -= alpha * q[i];
+                        zc[k] = rc[k] * d[i];
+                        rz += rc[k] * zc[k];
+                        rr += rc[k] * rc[k];
+                    }
+                    (rz, rr)
+                })
+                .collect();
+            let rz_next: f64 = sums.iter().map(|s| s.0).sum();
+            let rr: f64 = sums.iter().map(|s| s.1).sum();
             let beta = rz_next / rz;
             rz = rz_next;
             p.par_iter_mut()
                 .zip(&z)
                 .for_each(|(p, z)| *p = z + beta * *p);
             report.iterations += 1;
-            report.residual = dot(&r, &r).sqrt() / b_norm;
+            report.residual = rr.sqrt() / b_norm;
         }
         report.converged = report.residual <= self.options.tolerance;
         (x, report)
+    }
+
+    /// `q = A p`, returning `p · q` (chunked, fixed order).
+    fn mul_vec_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
+        let m = &self.matrix;
+        let partial: Vec<f64> = q
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(c, qc)| {
+                let start = c * CHUNK;
+                let mut sum = 0.0;
+                for (k, qi) in qc.iter_mut().enumerate() {
+                    let i = start + k;
+                    let range = m.row_start[i]..m.row_start[i + 1];
+                    *qi = m.cols[range.clone()]
+                        .iter()
+                        .zip(&m.vals[range])
+                        .map(|(&c, &v)| v * p[c as usize])
+                        .sum();
+                    sum += p[i] * *qi;
+                }
+                sum
+            })
+            .collect();
+        partial.iter().sum()
     }
 }
 
@@ -239,9 +278,12 @@ pub fn implicit_step(
     HeatSolver::new(stiffness, mass, fixed, field, tau, *options).step(field)
 }
 
+/// Vector length of one unit of parallel work; sums are taken per chunk, then over
+/// the chunks in order, so they do not depend on the thread count.
+const CHUNK: usize = 4096;
+
 /// Dot product summed over fixed chunks in a fixed order (thread-count independent).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    const CHUNK: usize = 4096;
     let partial: Vec<f64> = a
         .par_chunks(CHUNK)
         .zip(b.par_chunks(CHUNK))
