@@ -85,6 +85,34 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Find the neck loops of a closed surface: handles (around narrow parts of the
+    /// solid) and tunnels (around narrow parts of the space around it); both unless one
+    /// is asked for.
+    Loops {
+        /// The closed surface mesh.
+        mesh: PathBuf,
+        /// Find handle loops (inside).
+        #[arg(long)]
+        handles: bool,
+        /// Find tunnel loops (outside).
+        #[arg(long)]
+        tunnels: bool,
+        /// Last smoothing step N (classification runs from step 10 to N).
+        #[arg(long, default_value_t = 20)]
+        steps: usize,
+        /// Heat time step in units where the bounding box's longest side is 1.
+        #[arg(long, default_value_t = 0.01)]
+        tau: f64,
+        /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
+        #[arg(long)]
+        h: Option<f64>,
+        /// Write loops.obj (one `l` polyline per loop) and loops.json into this folder.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Generate an analytic test shape with known necks and write it as a mesh.
     Shape {
         /// sphere, torus, varying-torus, dumbbell, chain, eight or pretzel.
@@ -180,6 +208,33 @@ fn run(cli: Cli) -> Result<String> {
                 ..MorseOptions::default()
             };
             critical(mesh, exterior, &volume, &morse, output, json)
+        }
+        Command::Loops {
+            mesh,
+            handles,
+            tunnels,
+            steps,
+            tau,
+            h,
+            output,
+            json,
+        } => {
+            let options = pipeline::NeckOptions {
+                // Neither flag: both kinds.
+                handles: handles || !tunnels,
+                tunnels: tunnels || !handles,
+                volume: VolumeOptions {
+                    h,
+                    ..VolumeOptions::default()
+                },
+                morse: MorseOptions {
+                    steps,
+                    tau,
+                    ..MorseOptions::default()
+                },
+                ..pipeline::NeckOptions::default()
+            };
+            loops(mesh, &options, output, json)
         }
         Command::Shape {
             name,
@@ -303,6 +358,106 @@ fn critical(
     }
     if let Some(output) = output {
         let _ = writeln!(out, "critical points -> {}", output.display());
+    }
+    Ok(out)
+}
+
+fn loops(
+    path: PathBuf,
+    options: &pipeline::NeckOptions,
+    output: Option<PathBuf>,
+    json: bool,
+) -> Result<String> {
+    let (surface, _) = read_for_volume(&path)?;
+    let report = pipeline::find_necks(&surface, options)?;
+    for check in &report.morse {
+        for step in check.steps.iter().filter(|s| !s.morse_ok) {
+            eprintln!(
+                "necklace: MORSE CHECK FAILED ({:?}) at step {}: sum {} != expected {}",
+                check.side, step.step, step.morse_sum, step.morse_expected
+            );
+        }
+    }
+    let text = serde_json::to_string_pretty(&report)? + "\n";
+    if let Some(dir) = &output {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
+        let lines: Vec<Vec<[f64; 3]>> = report.loops.iter().map(|l| l.points.clone()).collect();
+        let names: Vec<String> = report
+            .loops
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                format!(
+                    "{}_{i}",
+                    serde_json::to_value(l.kind)
+                        .ok()
+                        .and_then(|v| v.as_str().map(String::from))
+                        .unwrap_or_default()
+                )
+            })
+            .collect();
+        io::write_polylines(dir.join("loops.obj"), &lines, &names)?;
+        std::fs::write(dir.join("loops.json"), &text)
+            .with_context(|| format!("cannot write {}", dir.join("loops.json").display()))?;
+    }
+    if json {
+        return Ok(text);
+    }
+    let mut out = String::new();
+    let _ = writeln!(out, "{}: {} loops", path.display(), report.loops.len());
+    let _ = writeln!(
+        out,
+        "  #  kind    length      radius    centre                          persistence  tightening"
+    );
+    for (i, l) in report.loops.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "{i:>3}  {:<6}  {:<10.5}  {:<8.5}  ({:>8.4}, {:>8.4}, {:>8.4})  {:>11}  {:?} in {} rounds (from {:.5})",
+            format!("{:?}", l.kind).to_lowercase(),
+            l.length,
+            l.radius,
+            l.center[0],
+            l.center[1],
+            l.center[2],
+            l.persistence,
+            l.tightening.status,
+            l.tightening.rounds,
+            l.initial_length
+        );
+    }
+    if !report.dropped.is_empty() {
+        let _ = writeln!(out, "{} saddles gave no loop:", report.dropped.len());
+        for d in &report.dropped {
+            let _ = writeln!(
+                out,
+                "  {:?} saddle {} at ({:.4}, {:.4}, {:.4}): {}",
+                d.kind,
+                d.seed,
+                d.saddle[0],
+                d.saddle[1],
+                d.saddle[2],
+                serde_json::to_string(&d.reason)?
+            );
+        }
+    }
+    for check in &report.morse {
+        let _ = writeln!(
+            out,
+            "Morse check {:?}: {} ({} steps)",
+            check.side,
+            if check.ok { "ok" } else { "FAILED" },
+            check.steps.len()
+        );
+    }
+    let t = &report.timings.total;
+    let _ = writeln!(
+        out,
+        "seconds: volume mesh {:.2}, distance {:.2}, smoothing {:.2}, critical points {:.2}, loops {:.3}, total {:.2}",
+        t.volume_mesh, t.distance, t.smoothing, t.critical_points, t.loops, t.total
+    );
+    if let Some(dir) = output {
+        let _ = writeln!(out, "loops -> {}", dir.join("loops.obj").display());
     }
     Ok(out)
 }

@@ -240,3 +240,73 @@ fn critical_json_has_the_documented_fields_and_writes_the_points() {
         1
     );
 }
+
+#[test]
+fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
+    let dir = temp_dir("loops");
+    let mesh = dir.join("dumbbell.obj");
+    let out_dir = dir.join("out");
+    let out = necklace(&["shape", "dumbbell", "-o", mesh.to_str().unwrap()]);
+    assert!(out.status.success());
+    let out = necklace(&[
+        "loops",
+        mesh.to_str().unwrap(),
+        "--json",
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for field in ["loops", "dropped", "morse", "timings"] {
+        assert!(!json[field].is_null(), "{field}");
+    }
+    let loops = json["loops"].as_array().unwrap();
+    assert_eq!(loops.len(), 1, "{loops:?}");
+    for field in [
+        "kind",
+        "points",
+        "length",
+        "initial_length",
+        "center",
+        "normal",
+        "radius",
+        "saddle",
+        "persistence",
+        "reason",
+    ] {
+        assert!(!loops[0][field].is_null(), "{field}");
+    }
+    assert_eq!(loops[0]["kind"], "handle");
+    let morse = json["morse"].as_array().unwrap();
+    assert_eq!(morse.len(), 2, "both sides by default");
+    assert!(morse.iter().all(|m| m["ok"] == true));
+    assert!(json["timings"]["total"]["total"].as_f64().unwrap() > 0.0);
+
+    // loops.obj: one closed `l` polyline per loop; loops.json is what --json printed.
+    let obj = std::fs::read_to_string(out_dir.join("loops.obj")).unwrap();
+    let lines: Vec<&str> = obj.lines().filter(|l| l.starts_with("l ")).collect();
+    assert_eq!(lines.len(), 1);
+    let ids: Vec<&str> = lines[0].split_whitespace().skip(1).collect();
+    assert_eq!(ids.first(), ids.last(), "closed");
+    assert_eq!(ids.len(), loops[0]["points"].as_array().unwrap().len() + 1);
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("loops.json")).unwrap())
+            .unwrap();
+    assert_eq!(saved["loops"], json["loops"]);
+
+    // Handles only: no tunnel side is run.
+    let out = necklace(&["loops", mesh.to_str().unwrap(), "--handles", "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["morse"].as_array().unwrap().len(), 1);
+
+    let out = necklace(&["loops", dir.join("missing.obj").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr).trim().lines().count(),
+        1
+    );
+}

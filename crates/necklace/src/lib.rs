@@ -16,6 +16,8 @@
 //! - [`morse`]: the smoothed distance field on a tet mesh, its critical points by link
 //!   classification (with the Morse check), their tracking under smoothing, and the
 //!   2-saddles that mark necks with their Hessian and cutting-plane normal (sec. 4.1–4.2).
+//! - [`loops`]: the neck loops on the surface: plane cut through each saddle, geodesic
+//!   tightening (strip unfolding and funnel), selection with reasons (sec. 4.3).
 //! - [`shapes`]: analytic test shapes (signed distance functions meshed by marching
 //!   tetrahedra) with their known necks: the ground truth of the test suite.
 //! - [`pipeline`]: the only module that composes the others.
@@ -27,6 +29,7 @@ pub mod distance;
 pub mod error;
 mod geom;
 pub mod io;
+pub mod loops;
 pub mod mesh;
 pub mod morse;
 pub mod pipeline;

@@ -12,7 +12,9 @@
 //!   casts, and calls the stuffing mesher (`volume`);
 //! - [`critical_points`] computes the distance field on that mesh ([`distance_field`],
 //!   through `distance`) and hands it to `morse` for smoothing, classification,
-//!   tracking and saddle selection.
+//!   tracking and saddle selection;
+//! - [`find_necks`] runs the whole method on both sides and hands each side's saddles to
+//!   `loops` (plane cut, tightening, selection), returning a [`NeckReport`].
 
 use std::path::Path;
 use std::time::Instant;
@@ -23,6 +25,7 @@ use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, dot, norm, scale, sub};
 use crate::io;
+use crate::loops::{self, DropReason, DroppedLoop, LoopKind, LoopOptions, NeckLoop, Seed};
 use crate::mesh::{MeshReport, SurfaceMesh, Topology};
 use crate::morse::{self, MorseOptions, MorseResult, VertexType};
 use crate::tet::{TetMesh, VertexKind};
@@ -683,4 +686,208 @@ mod tests {
         assert_eq!(err.kind(), ErrorKind::InvalidMesh);
         assert!(err.to_string().contains("3 boundary edges"), "{err}");
     }
+}
+
+/// Options of [`find_necks`]: which sides, and each stage's options.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NeckOptions {
+    /// Look for handles (inside). Default true.
+    pub handles: bool,
+    /// Look for tunnels (outside). Default true.
+    pub tunnels: bool,
+    /// Volume meshing.
+    pub volume: VolumeOptions,
+    /// Smoothing, classification and saddle selection.
+    pub morse: MorseOptions,
+    /// Plane cut, tightening and loop selection.
+    pub loops: LoopOptions,
+}
+
+impl Default for NeckOptions {
+    fn default() -> Self {
+        NeckOptions {
+            handles: true,
+            tunnels: true,
+            volume: VolumeOptions::default(),
+            morse: MorseOptions::default(),
+            loops: LoopOptions::default(),
+        }
+    }
+}
+
+/// Wall-clock seconds per stage of one side.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StageTimings {
+    /// Volume mesh.
+    pub volume_mesh: f64,
+    /// Exact distance field on its vertices.
+    pub distance: f64,
+    /// Assembly and heat steps.
+    pub smoothing: f64,
+    /// Classification, tracking and the Hessian test.
+    pub critical_points: f64,
+    /// Plane cuts, tightening and selection.
+    pub loops: f64,
+    /// Sum of the above.
+    pub total: f64,
+}
+
+/// The Morse check of one side: every classified step, and whether all held.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MorseCheck {
+    /// Which side.
+    pub side: Side,
+    /// Whether `morse_sum == morse_expected` at every step.
+    pub ok: bool,
+    /// What the surface's genus predicts (see [`CriticalReport`]).
+    pub surface_morse_expected: Option<i64>,
+    /// The mesh's own expectation (χ of its subcomplexes).
+    pub morse_expected: morse::MorseExpectation,
+    /// Per-step counts and checks.
+    pub steps: Vec<morse::StepSummary>,
+}
+
+/// One side's intermediate results.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SideReport {
+    /// Which side.
+    pub side: Side,
+    /// The volume mesh's summary.
+    pub volume: VolumeReport,
+    /// Interior vertices (unknowns of the heat system).
+    pub unknowns: usize,
+    /// The selected 2-saddles (the loops' seeds, in this order).
+    pub saddles: Vec<morse::Saddle>,
+    /// 2-saddles not selected, with reasons.
+    pub rejected: Vec<morse::RejectedSaddle>,
+    /// Seconds per stage.
+    pub timings: StageTimings,
+}
+
+/// What [`find_necks`] found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NeckReport {
+    /// Handle loops, then tunnel loops, each by persistence then length.
+    pub loops: Vec<NeckLoop>,
+    /// Saddles that gave no kept loop, with reasons (`Duplicate::of` indexes `loops`).
+    pub dropped: Vec<DroppedLoop>,
+    /// The Morse check of each side.
+    pub morse: Vec<MorseCheck>,
+    /// Seconds per stage, per side, and the sum over sides.
+    pub timings: NeckTimings,
+    /// Per side: volume mesh, saddles, stage timings.
+    pub sides: Vec<SideReport>,
+}
+
+/// Stage timings per side and in total.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct NeckTimings {
+    /// Inside (handles), when run.
+    pub handles: Option<StageTimings>,
+    /// Outside (tunnels), when run.
+    pub tunnels: Option<StageTimings>,
+    /// Sum over the sides run.
+    pub total: StageTimings,
+}
+
+/// The whole method on a closed, outward-oriented surface (see [`prepare_surface`]):
+/// for each side asked for, volume mesh → distance field → smoothing and critical
+/// points → neck loops on `surface`.
+pub fn find_necks(surface: &SurfaceMesh, options: &NeckOptions) -> Result<NeckReport> {
+    if !options.handles && !options.tunnels {
+        return Err(Error::invalid_argument(
+            "nothing to do: ask for handles, tunnels or both",
+        ));
+    }
+    let surface_report = MeshReport::new(surface);
+    let mut report = NeckReport {
+        loops: Vec::new(),
+        dropped: Vec::new(),
+        morse: Vec::new(),
+        timings: NeckTimings::default(),
+        sides: Vec::new(),
+    };
+    let sides = [
+        (Side::Inside, options.handles),
+        (Side::Outside, options.tunnels),
+    ];
+    for (side, wanted) in sides {
+        if !wanted {
+            continue;
+        }
+        let kind = match side {
+            Side::Inside => LoopKind::Handle,
+            Side::Outside => LoopKind::Tunnel,
+        };
+        let volume = volume_mesh(surface, side, &options.volume)?;
+        let start = Instant::now();
+        let field = distance_field(surface, &volume.mesh);
+        let distance_seconds = start.elapsed().as_secs_f64();
+        let result = morse::analyze(&volume.mesh, &field, &options.morse)?;
+        let seeds: Vec<Seed> = result
+            .saddles
+            .iter()
+            .map(|s| Seed {
+                position: s.position,
+                normal: s.normal,
+                persistence: s.persistence,
+            })
+            .collect();
+        let found = loops::find_loops(surface, &seeds, kind, &options.loops)?;
+
+        let t = &result.timings;
+        let l = &found.timings;
+        let mut timings = StageTimings {
+            volume_mesh: volume.seconds,
+            distance: distance_seconds,
+            smoothing: t.assembly + t.smoothing,
+            critical_points: t.classification + t.selection,
+            loops: l.preparation + l.cut_and_tighten + l.selection,
+            total: 0.0,
+        };
+        timings.total = timings.volume_mesh
+            + timings.distance
+            + timings.smoothing
+            + timings.critical_points
+            + timings.loops;
+        let sum = &mut report.timings.total;
+        sum.volume_mesh += timings.volume_mesh;
+        sum.distance += timings.distance;
+        sum.smoothing += timings.smoothing;
+        sum.critical_points += timings.critical_points;
+        sum.loops += timings.loops;
+        sum.total += timings.total;
+        match side {
+            Side::Inside => report.timings.handles = Some(timings),
+            Side::Outside => report.timings.tunnels = Some(timings),
+        }
+
+        report.morse.push(MorseCheck {
+            side,
+            ok: result.morse_failures().next().is_none(),
+            surface_morse_expected: surface_morse_expected(&surface_report, side),
+            morse_expected: result.morse_expected,
+            steps: result.steps.clone(),
+        });
+        // Loops of this side follow those already listed: shift duplicate references.
+        let offset = report.loops.len();
+        report
+            .dropped
+            .extend(found.dropped.into_iter().map(|mut d| {
+                if let DropReason::Duplicate { of, .. } = &mut d.reason {
+                    *of += offset;
+                }
+                d
+            }));
+        report.loops.extend(found.loops);
+        report.sides.push(SideReport {
+            side,
+            volume: volume.report(),
+            unknowns: result.unknowns,
+            saddles: result.saddles,
+            rejected: result.rejected,
+            timings,
+        });
+    }
+    Ok(report)
 }

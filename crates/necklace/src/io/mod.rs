@@ -175,6 +175,50 @@ pub fn write_point_cloud(path: impl AsRef<Path>, points: &PointCloud) -> Result<
         .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
 }
 
+/// Write closed polylines as OBJ: their points as `v` lines and each polyline as one
+/// `l` element that repeats its first point at the end; `names[i]`, when given, becomes an
+/// `o` line before polyline `i`.
+pub fn write_polylines(
+    path: impl AsRef<Path>,
+    polylines: &[Vec<[f64; 3]>],
+    names: &[String],
+) -> Result<()> {
+    let path = path.as_ref();
+    if Format::from_extension(path) != Some(Format::Obj) {
+        return Err(Error::new(
+            ErrorKind::UnknownFormat,
+            "polylines are written as OBJ: use a .obj file name",
+        )
+        .in_file(path));
+    }
+    std::fs::write(path, polylines_obj(polylines, names))
+        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+}
+
+/// The OBJ text of [`write_polylines`].
+pub fn polylines_obj(polylines: &[Vec<[f64; 3]>], names: &[String]) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::from("# closed polylines written by necklace\n");
+    let mut next = 1usize;
+    for (i, line) in polylines.iter().enumerate() {
+        if let Some(name) = names.get(i) {
+            let _ = writeln!(out, "o {}", name.replace(char::is_whitespace, "_"));
+        }
+        for p in line {
+            let _ = writeln!(out, "v {} {} {}", p[0], p[1], p[2]);
+        }
+        if !line.is_empty() {
+            out.push('l');
+            for k in 0..line.len() {
+                let _ = write!(out, " {}", next + k);
+            }
+            let _ = writeln!(out, " {next}");
+        }
+        next += line.len();
+    }
+    out
+}
+
 /// Write a mesh; the format comes from the extension (OBJ, OFF or PLY).
 pub fn write_mesh(path: impl AsRef<Path>, mesh: &SurfaceMesh) -> Result<()> {
     let path = path.as_ref();

@@ -1,0 +1,240 @@
+//! Plane cut of a surface (sec. 4.3, first step): the closed curves where a plane meets
+//! the triangles, as cyclic sequences of edge crossings, and the choice of the curve
+//! around a point of the plane.
+//!
+//! Conventions: a vertex's side is the sign of `n · (p − c)`; a vertex exactly on the
+//! plane counts as on the positive side (symbolic perturbation: the plane is moved by an
+//! infinitesimal amount towards −n), so every edge is either crossed once or not at all
+//! and every triangle is crossed by 0 or 2 of its edges, whatever the input. A crossing is
+//! `(edge, t)` with the point `(1 − t)·a + t·b` for the edge's vertices `[a, b]` as stored
+//! by [`Topology`]; a vertex on the plane gives exactly `t = 0` or `t = 1`.
+//!
+//! Entry points: [`plane_cut`], [`loop_around`].
+
+use crate::geom::{cross, dot, lerp, norm, scale, sub};
+use crate::mesh::{SurfaceMesh, Topology};
+
+/// A plane through `origin` with unit `normal`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plane {
+    /// A point of the plane.
+    pub origin: [f64; 3],
+    /// Unit normal.
+    pub normal: [f64; 3],
+}
+
+/// Where a cut curve crosses a mesh edge.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crossing {
+    /// Edge index in the [`Topology`].
+    pub edge: u32,
+    /// Parameter along the edge's stored vertex pair, in `[0, 1]`.
+    pub t: f64,
+}
+
+/// One curve of a plane cut.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CutCurve {
+    /// Crossings in order along the curve.
+    pub crossings: Vec<Crossing>,
+    /// `faces[i]` is the triangle between `crossings[i]` and `crossings[i + 1]`
+    /// (cyclically for a closed curve).
+    pub faces: Vec<u32>,
+    /// Whether the curve closes; an open curve ends at a boundary or non-manifold edge.
+    pub closed: bool,
+}
+
+impl CutCurve {
+    /// The 3D points of the crossings.
+    pub fn points(&self, mesh: &SurfaceMesh, topology: &Topology) -> Vec<[f64; 3]> {
+        self.crossings
+            .iter()
+            .map(|c| crossing_point(mesh, topology, *c))
+            .collect()
+    }
+}
+
+/// 3D point of a crossing.
+pub fn crossing_point(mesh: &SurfaceMesh, topology: &Topology, c: Crossing) -> [f64; 3] {
+    let [a, b] = topology.edges()[c.edge as usize];
+    lerp(mesh.positions[a as usize], mesh.positions[b as usize], c.t)
+}
+
+/// Length of a closed polyline.
+pub fn closed_length(points: &[[f64; 3]]) -> f64 {
+    let n = points.len();
+    (0..n)
+        .map(|i| norm(sub(points[(i + 1) % n], points[i])))
+        .sum()
+}
+
+/// All curves where `plane` meets the surface. Closed curves on a closed manifold mesh;
+/// open curves where the surface has a boundary or non-manifold edge. `O(V + F)`.
+pub fn plane_cut(mesh: &SurfaceMesh, topology: &Topology, plane: &Plane) -> Vec<CutCurve> {
+    let positive: Vec<bool> = mesh
+        .positions
+        .iter()
+        .map(|p| dot(plane.normal, sub(*p, plane.origin)) >= 0.0)
+        .collect();
+    let crossed = |e: usize| {
+        let [a, b] = topology.edges()[e];
+        positive[a as usize] != positive[b as usize]
+    };
+    // The crossed edge of face `f` other than `e` (exactly one by the side rule).
+    let other_crossed = |f: usize, e: usize| {
+        (0..3)
+            .filter_map(|i| topology.face_edge(f, i))
+            .find(|&g| g != e && crossed(g))
+    };
+    let make = |e: usize| {
+        let [a, b] = topology.edges()[e];
+        let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+        let (da, db) = (
+            dot(plane.normal, sub(pa, plane.origin)),
+            dot(plane.normal, sub(pb, plane.origin)),
+        );
+        // t measured from a; for a vertex on the plane (d = 0, positive side) t is exactly 0 or 1.
+        let t = if da == 0.0 {
+            0.0
+        } else if db == 0.0 {
+            1.0
+        } else {
+            (da / (da - db)).clamp(0.0, 1.0)
+        };
+        Crossing { edge: e as u32, t }
+    };
+
+    let mut visited = vec![false; topology.num_edges()];
+    let mut curves = Vec::new();
+    for start in 0..topology.num_edges() {
+        if visited[start] || !crossed(start) {
+            continue;
+        }
+        // Walk one way; if the walk hits an open edge, walk the other way from `start` too.
+        let forward = walk(start, 0, topology, &other_crossed, &mut visited);
+        let (mut edges, mut faces, closed) = forward;
+        if !closed {
+            let (back_edges, back_faces, _) =
+                walk(start, 1, topology, &other_crossed, &mut visited);
+            // back walk goes start -> ... ; reverse it in front of the forward part.
+            let mut e: Vec<usize> = back_edges.into_iter().skip(1).rev().collect();
+            let mut f: Vec<u32> = back_faces.into_iter().rev().collect();
+            e.extend(edges);
+            f.extend(faces);
+            edges = e;
+            faces = f;
+        }
+        curves.push(CutCurve {
+            crossings: edges.into_iter().map(make).collect(),
+            faces,
+            closed,
+        });
+    }
+    curves
+}
+
+/// Follow crossed edges from `start` leaving through its `side`-th face. Returns the
+/// edges (starting with `start`), the faces between them, and whether the walk closed.
+fn walk(
+    start: usize,
+    side: usize,
+    topology: &Topology,
+    other_crossed: &impl Fn(usize, usize) -> Option<usize>,
+    visited: &mut [bool],
+) -> (Vec<usize>, Vec<u32>, bool) {
+    let mut edges = vec![start];
+    let mut faces = Vec::new();
+    visited[start] = true;
+    let start_faces = topology.edge_faces(start);
+    if start_faces.len() != 2 || side >= start_faces.len() {
+        return (edges, faces, false);
+    }
+    let mut face = start_faces[side] as usize;
+    let mut edge = start;
+    loop {
+        let Some(next) = other_crossed(face, edge) else {
+            return (edges, faces, false);
+        };
+        faces.push(face as u32);
+        if next == start {
+            return (edges, faces, true);
+        }
+        if visited[next] {
+            // Only possible through a non-manifold fan; stop rather than loop forever.
+            return (edges, faces, false);
+        }
+        visited[next] = true;
+        edges.push(next);
+        let ef = topology.edge_faces(next);
+        if ef.len() != 2 {
+            return (edges, faces, false);
+        }
+        face = if ef[0] as usize == face { ef[1] } else { ef[0] } as usize;
+        edge = next;
+    }
+}
+
+/// An orthonormal basis `(u, v)` of the plane with normal `n`.
+pub fn plane_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let helper = if n[0].abs() < 0.6 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let u = cross(n, helper);
+    let u = scale(u, 1.0 / norm(u));
+    (u, cross(n, u))
+}
+
+/// Signed area and whether `point` is inside, for a closed polygon in plane coordinates.
+fn area_and_contains(poly: &[[f64; 2]], point: [f64; 2]) -> (f64, bool) {
+    let n = poly.len();
+    let mut area = 0.0;
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        area += a[0] * b[1] - a[1] * b[0];
+        // Crossing-number test with the half-open rule on y.
+        if (a[1] > point[1]) != (b[1] > point[1]) {
+            let x = a[0] + (point[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if point[0] < x {
+                inside = !inside;
+            }
+        }
+    }
+    (0.5 * area, inside)
+}
+
+/// Index of the closed curve around `point` (a point of the plane): among the closed
+/// curves whose in-plane polygon contains the point's projection, the one of smallest
+/// area. `None` when no closed curve contains it.
+pub fn loop_around(
+    mesh: &SurfaceMesh,
+    topology: &Topology,
+    plane: &Plane,
+    curves: &[CutCurve],
+    point: [f64; 3],
+) -> Option<usize> {
+    let (u, v) = plane_basis(plane.normal);
+    let project = |p: [f64; 3]| {
+        let d = sub(p, plane.origin);
+        [dot(d, u), dot(d, v)]
+    };
+    let target = project(point);
+    let mut best: Option<(usize, f64)> = None;
+    for (i, curve) in curves.iter().enumerate() {
+        if !curve.closed || curve.crossings.len() < 3 {
+            continue;
+        }
+        let poly: Vec<[f64; 2]> = curve
+            .points(mesh, topology)
+            .into_iter()
+            .map(project)
+            .collect();
+        let (area, inside) = area_and_contains(&poly, target);
+        if inside && best.is_none_or(|(_, a)| area.abs() < a) {
+            best = Some((i, area.abs()));
+        }
+    }
+    best.map(|(i, _)| i)
+}

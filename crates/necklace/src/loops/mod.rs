@@ -1,0 +1,505 @@
+//! Neck loops on the surface (sec. 4.3 of the paper): from each selected 2-saddle, the
+//! loop that lassos its neck.
+//!
+//! For every seed (a saddle position and its cutting-plane normal):
+//! 1. [`cut`]: intersect the plane through the saddle with the input surface and keep the
+//!    closed curve around the saddle (the smallest in-plane polygon containing it).
+//!    Optionally ("lower link variation") try a few normals tilted around the given one
+//!    and keep the shortest such curve.
+//! 2. [`tighten`]: shorten it into a closed geodesic, not tied to mesh edges. A loop that
+//!    collapses (slides off a cap) or does not settle is dropped with its reason.
+//! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; merge
+//!    duplicates (centres within `merge_distance` × diagonal and lengths within
+//!    `merge_length`), keeping the highest persistence, then the shortest; order by
+//!    persistence (descending), then length.
+//!
+//! Units are those of the surface. Every seed ends either as a loop or in `dropped` with
+//! a reason. Seeds are processed in parallel; the result does not depend on the thread
+//! count. Entry point: [`find_loops`].
+
+pub mod cut;
+pub mod tighten;
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::{Error, ErrorKind, Result};
+use crate::geom::{add, cross, dot, norm, scale, sub};
+use crate::mesh::{SurfaceMesh, Topology};
+use cut::{closed_length, loop_around, plane_basis, plane_cut, Plane};
+use tighten::{tighten, SurfaceGeometry};
+pub use tighten::{SurfacePoint, TightenOptions, TightenStatus, Tightened};
+
+/// Which volume the saddles came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LoopKind {
+    /// From the inside volume: the loop goes around a narrow part of the solid.
+    Handle,
+    /// From the outside shell: the loop goes around a narrow part of the space around it.
+    Tunnel,
+}
+
+/// Where a loop starts: a selected 2-saddle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Seed {
+    /// Saddle position (a point of the cutting plane).
+    pub position: [f64; 3],
+    /// Cutting-plane normal (need not be unit length, must be non-zero).
+    pub normal: [f64; 3],
+    /// Steps the saddle survived under smoothing.
+    pub persistence: usize,
+}
+
+/// Options of [`find_loops`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LoopOptions {
+    /// Tightening options.
+    pub tighten: TightenOptions,
+    /// Extra cutting normals tried around the given one ("lower link variation"); the
+    /// shortest initial loop wins. Default 0 (the Hessian normal only).
+    pub normal_variations: usize,
+    /// Tilt of those extra normals, radians. Default 0.2 (about 11°).
+    pub variation_angle: f64,
+    /// Loops longer than this × the bounding-box diagonal are dropped. Default 1.5.
+    pub max_length: f64,
+    /// Two loops whose centres are closer than this × the diagonal ... Default 0.01.
+    pub merge_distance: f64,
+    /// ... and whose lengths differ by less than this fraction are duplicates. Default 0.02.
+    pub merge_length: f64,
+}
+
+impl Default for LoopOptions {
+    fn default() -> Self {
+        LoopOptions {
+            tighten: TightenOptions::default(),
+            normal_variations: 0,
+            variation_angle: 0.2,
+            max_length: 1.5,
+            merge_distance: 0.01,
+            merge_length: 0.02,
+        }
+    }
+}
+
+/// A neck loop.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NeckLoop {
+    /// Handle or tunnel.
+    pub kind: LoopKind,
+    /// Closed polyline on the surface (first point not repeated).
+    pub points: Vec<[f64; 3]>,
+    /// The same points as surface locations (edge + parameter, or vertex).
+    pub surface_points: Vec<SurfacePoint>,
+    /// Length of the tightened loop.
+    pub length: f64,
+    /// Length of the plane-cut loop it started from.
+    pub initial_length: f64,
+    /// Length-weighted centroid of the polyline.
+    pub center: [f64; 3],
+    /// Unit normal of the best-fit plane (least squares), oriented so that the loop
+    /// turns counter-clockwise around it.
+    pub normal: [f64; 3],
+    /// `length / 2π`.
+    pub radius: f64,
+    /// The saddle it came from.
+    pub saddle: [f64; 3],
+    /// Index of that saddle among the seeds.
+    pub seed: usize,
+    /// The saddle's persistence.
+    pub persistence: usize,
+    /// Seeds whose loops were duplicates of this one.
+    pub duplicates: Vec<usize>,
+    /// Why it was kept, in words.
+    pub reason: String,
+    /// How tightening ended, and its geodesic diagnostics.
+    pub tightening: TighteningReport,
+}
+
+/// Diagnostics of the tightening of a kept loop.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TighteningReport {
+    /// Converged or stalled.
+    pub status: TightenStatus,
+    /// Strip-update rounds.
+    pub rounds: usize,
+    /// Vertex updates.
+    pub updates: usize,
+    /// Largest turn across an edge (radians; 0 for straight).
+    pub max_edge_turn: f64,
+    /// Smallest side angle at a vertex passed through (radians; ≥ π for a geodesic).
+    pub min_vertex_angle: f64,
+    /// No vertex visited twice, no crossing segments.
+    pub simple: bool,
+}
+
+/// Why a seed gave no loop.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "reason")]
+pub enum DropReason {
+    /// No closed cut curve contains the saddle's projection.
+    NoLoopAroundSaddle {
+        /// Closed curves the plane cut had.
+        closed_curves: usize,
+        /// Open curves (the surface has a boundary there).
+        open_curves: usize,
+    },
+    /// The loop kept shrinking: it slid off a cap and is not a neck.
+    Collapsed {
+        /// Length of the plane-cut loop.
+        initial_length: f64,
+        /// Length when it was stopped.
+        length: f64,
+    },
+    /// Tightening did not settle within the round limit.
+    NotConverged {
+        /// Rounds done.
+        rounds: usize,
+        /// Length when it was stopped.
+        length: f64,
+    },
+    /// The cut curve did not form a strip of an oriented manifold surface.
+    InvalidStrip,
+    /// The tightened loop visits a vertex twice or crosses itself.
+    NotSimple {
+        /// Its length.
+        length: f64,
+    },
+    /// Longer than `max_length` × the bounding-box diagonal.
+    TooLong {
+        /// Its length.
+        length: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// A duplicate of a kept loop.
+    Duplicate {
+        /// Index of the kept loop in `loops`.
+        of: usize,
+        /// Its own length.
+        length: f64,
+    },
+}
+
+/// A seed that gave no loop, and why.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DroppedLoop {
+    /// Handle or tunnel.
+    pub kind: LoopKind,
+    /// Index of the seed.
+    pub seed: usize,
+    /// The saddle position.
+    pub saddle: [f64; 3],
+    /// The saddle's persistence.
+    pub persistence: usize,
+    /// Why.
+    #[serde(flatten)]
+    pub reason: DropReason,
+}
+
+/// Wall-clock seconds of the loop stage.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct LoopTimings {
+    /// Topology and vertex angles of the surface.
+    pub preparation: f64,
+    /// Plane cuts and tightening of all seeds.
+    pub cut_and_tighten: f64,
+    /// Length filter, duplicates, ordering.
+    pub selection: f64,
+}
+
+/// Loops and dropped seeds.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LoopResult {
+    /// Kept loops, by persistence (descending), then length.
+    pub loops: Vec<NeckLoop>,
+    /// Every seed that gave no kept loop.
+    pub dropped: Vec<DroppedLoop>,
+    /// Stage timings.
+    pub timings: LoopTimings,
+}
+
+/// Loops of `kind` around the necks marked by `seeds` on `surface` (the input surface,
+/// not the volume mesh's boundary).
+pub fn find_loops(
+    surface: &SurfaceMesh,
+    seeds: &[Seed],
+    kind: LoopKind,
+    options: &LoopOptions,
+) -> Result<LoopResult> {
+    check_inputs(surface, seeds, options)?;
+
+    let start = Instant::now();
+    let topology = Topology::new(surface);
+    let geometry = SurfaceGeometry::new(surface, &topology);
+    let preparation = start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
+        .par_iter()
+        .map(|seed| loop_from_seed(surface, &topology, &geometry, seed, options))
+        .collect();
+    let cut_and_tighten = start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let limit = options.max_length * surface.bbox_diagonal();
+    let mut dropped = Vec::new();
+    let mut candidates = Vec::new();
+    for (i, outcome) in outcomes.into_iter().enumerate() {
+        let drop = |reason| DroppedLoop {
+            kind,
+            seed: i,
+            saddle: seeds[i].position,
+            persistence: seeds[i].persistence,
+            reason,
+        };
+        match outcome {
+            Err(reason) => dropped.push(drop(reason)),
+            Ok(c) if c.tightened.length > limit => dropped.push(drop(DropReason::TooLong {
+                length: c.tightened.length,
+                limit,
+            })),
+            Ok(c) => candidates.push((i, c)),
+        }
+    }
+    let loops = select(surface, seeds, kind, candidates, options, &mut dropped);
+    dropped.sort_by_key(|d| d.seed);
+    let selection = start.elapsed().as_secs_f64();
+
+    Ok(LoopResult {
+        loops,
+        dropped,
+        timings: LoopTimings {
+            preparation,
+            cut_and_tighten,
+            selection,
+        },
+    })
+}
+
+fn check_inputs(surface: &SurfaceMesh, seeds: &[Seed], options: &LoopOptions) -> Result<()> {
+    let bad = |what: String| Err(Error::new(ErrorKind::InvalidArgument, what));
+    if surface.triangles.is_empty() {
+        return bad("the surface has no triangles".into());
+    }
+    for (i, s) in seeds.iter().enumerate() {
+        let finite = s.position.iter().chain(&s.normal).all(|x| x.is_finite());
+        if !finite || norm(s.normal) == 0.0 {
+            return bad(format!(
+                "seed {i} has a non-finite position or a zero normal"
+            ));
+        }
+    }
+    let t = &options.tighten;
+    let positive = [
+        options.max_length,
+        options.merge_length,
+        t.min_length_ratio,
+        t.angle_tolerance,
+    ];
+    if positive.iter().any(|x| !(x.is_finite() && *x > 0.0))
+        || !(options.merge_distance.is_finite() && options.merge_distance >= 0.0)
+        || !(options.variation_angle.is_finite() && options.variation_angle >= 0.0)
+        || !(t.rel_tolerance.is_finite() && t.rel_tolerance >= 0.0)
+        || t.max_rounds == 0
+    {
+        return bad("loop options must be finite and positive (max_rounds at least 1)".into());
+    }
+    Ok(())
+}
+
+/// A tightened loop before selection.
+struct Candidate {
+    tightened: Tightened,
+}
+
+/// Cut, choose, tighten.
+fn loop_from_seed(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    geometry: &SurfaceGeometry,
+    seed: &Seed,
+    options: &LoopOptions,
+) -> std::result::Result<Candidate, DropReason> {
+    let n = scale(seed.normal, 1.0 / norm(seed.normal));
+    let mut normals = vec![n];
+    let (u, v) = plane_basis(n);
+    let k = options.normal_variations;
+    for j in 0..k {
+        let phi = 2.0 * std::f64::consts::PI * j as f64 / k as f64;
+        let dir = add(scale(u, phi.cos()), scale(v, phi.sin()));
+        let a = options.variation_angle;
+        normals.push(add(scale(n, a.cos()), scale(dir, a.sin())));
+    }
+
+    // The shortest closed curve around the saddle over the normals tried.
+    let mut best: Option<(f64, cut::CutCurve)> = None;
+    let (mut closed, mut open) = (0, 0);
+    for normal in normals {
+        let plane = Plane {
+            origin: seed.position,
+            normal,
+        };
+        let mut curves = plane_cut(surface, topology, &plane);
+        if best.is_none() {
+            closed = curves.iter().filter(|c| c.closed).count();
+            open = curves.len() - closed;
+        }
+        if let Some(i) = loop_around(surface, topology, &plane, &curves, seed.position) {
+            let curve = curves.swap_remove(i);
+            let length = closed_length(&curve.points(surface, topology));
+            if best.as_ref().is_none_or(|(l, _)| length < *l) {
+                best = Some((length, curve));
+            }
+        }
+    }
+    let Some((_, curve)) = best else {
+        return Err(DropReason::NoLoopAroundSaddle {
+            closed_curves: closed,
+            open_curves: open,
+        });
+    };
+
+    let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
+    match t.status {
+        TightenStatus::Converged | TightenStatus::Stalled if !t.simple => {
+            Err(DropReason::NotSimple { length: t.length })
+        }
+        TightenStatus::Converged | TightenStatus::Stalled => Ok(Candidate { tightened: t }),
+        TightenStatus::Collapsed => Err(DropReason::Collapsed {
+            initial_length: t.initial_length,
+            length: t.length,
+        }),
+        TightenStatus::NotConverged => Err(DropReason::NotConverged {
+            rounds: t.rounds,
+            length: t.length,
+        }),
+        TightenStatus::InvalidStrip => Err(DropReason::InvalidStrip),
+    }
+}
+
+/// Order by persistence then length, and merge duplicates into the first of them.
+fn select(
+    surface: &SurfaceMesh,
+    seeds: &[Seed],
+    kind: LoopKind,
+    mut candidates: Vec<(usize, Candidate)>,
+    options: &LoopOptions,
+    dropped: &mut Vec<DroppedLoop>,
+) -> Vec<NeckLoop> {
+    candidates.sort_by(|(i, a), (j, b)| {
+        seeds[*j]
+            .persistence
+            .cmp(&seeds[*i].persistence)
+            .then(a.tightened.length.total_cmp(&b.tightened.length))
+            .then(i.cmp(j))
+    });
+    let diagonal = surface.bbox_diagonal();
+    let mut loops: Vec<NeckLoop> = Vec::new();
+    for (i, c) in candidates {
+        let t = c.tightened;
+        let center = centroid(&t.points);
+        let duplicate_of = loops.iter().position(|l| {
+            norm(sub(l.center, center)) <= options.merge_distance * diagonal
+                && (l.length - t.length).abs() <= options.merge_length * l.length.max(t.length)
+        });
+        if let Some(of) = duplicate_of {
+            loops[of].duplicates.push(i);
+            dropped.push(DroppedLoop {
+                kind,
+                seed: i,
+                saddle: seeds[i].position,
+                persistence: seeds[i].persistence,
+                reason: DropReason::Duplicate {
+                    of,
+                    length: t.length,
+                },
+            });
+            continue;
+        }
+        let seed = seeds[i];
+        let how = match t.status {
+            TightenStatus::Converged => "a closed geodesic",
+            _ => "a loop whose last round no longer shortened it",
+        };
+        let reason = format!(
+            "saddle persistence {}; tightened in {} rounds from {:.6} to {:.6}, {}; shorter than {} x diagonal",
+            seed.persistence, t.rounds, t.initial_length, t.length, how, options.max_length
+        );
+        loops.push(NeckLoop {
+            kind,
+            normal: best_fit_normal(&t.points, center),
+            center,
+            radius: t.length / (2.0 * std::f64::consts::PI),
+            saddle: seed.position,
+            seed: i,
+            persistence: seed.persistence,
+            duplicates: Vec::new(),
+            reason,
+            tightening: TighteningReport {
+                status: t.status,
+                rounds: t.rounds,
+                updates: t.updates,
+                max_edge_turn: t.max_edge_turn,
+                min_vertex_angle: t.min_vertex_angle,
+                simple: t.simple,
+            },
+            length: t.length,
+            initial_length: t.initial_length,
+            points: t.points,
+            surface_points: t.surface_points,
+        });
+    }
+    loops
+}
+
+/// Length-weighted centroid of a closed polyline (each segment counts at its midpoint).
+pub fn centroid(points: &[[f64; 3]]) -> [f64; 3] {
+    let n = points.len();
+    let mut sum = [0.0; 3];
+    let mut total = 0.0;
+    for i in 0..n {
+        let (a, b) = (points[i], points[(i + 1) % n]);
+        let w = norm(sub(b, a));
+        sum = add(sum, scale(add(a, b), 0.5 * w));
+        total += w;
+    }
+    if total > 0.0 {
+        scale(sum, 1.0 / total)
+    } else {
+        points.first().copied().unwrap_or([0.0; 3])
+    }
+}
+
+/// Unit normal of the least-squares plane through the points (smallest principal axis of
+/// their covariance), oriented along the loop's vector area.
+pub fn best_fit_normal(points: &[[f64; 3]], center: [f64; 3]) -> [f64; 3] {
+    let mut cov = nalgebra::Matrix3::<f64>::zeros();
+    for p in points {
+        let d = nalgebra::Vector3::from(sub(*p, center));
+        cov += d * d.transpose();
+    }
+    let eig = nalgebra::SymmetricEigen::new(cov);
+    let k = eig.eigenvalues.imin();
+    let e = eig.eigenvectors.column(k);
+    let mut normal = [e[0], e[1], e[2]];
+    let n = points.len();
+    let mut area = [0.0; 3];
+    for i in 0..n {
+        area = add(
+            area,
+            cross(sub(points[i], center), sub(points[(i + 1) % n], center)),
+        );
+    }
+    if dot(area, normal) < 0.0 {
+        normal = scale(normal, -1.0);
+    }
+    let l = norm(normal);
+    if l > 0.0 {
+        scale(normal, 1.0 / l)
+    } else {
+        normal
+    }
+}

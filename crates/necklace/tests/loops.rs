@@ -1,0 +1,454 @@
+//! Neck loops (sec. 4.3): plane cut, tightening and selection against shapes whose
+//! narrowest loops are known in closed form.
+
+use std::f64::consts::PI;
+
+use necklace::loops::cut::{closed_length, loop_around, plane_cut, Plane};
+use necklace::loops::tighten::{tighten, SurfaceGeometry, TightenStatus};
+use necklace::loops::{
+    find_loops, DropReason, LoopKind, LoopOptions, NeckLoop, Seed, SurfacePoint, TightenOptions,
+    Tightened,
+};
+use necklace::mesh::Topology;
+use necklace::morse::MorseOptions;
+use necklace::pipeline::{find_necks, NeckOptions, NeckReport};
+use necklace::shapes::{Shape, ShapeKind};
+use necklace::SurfaceMesh;
+
+/// A closed surface of revolution about z: radius `r(z)` for z in [-h, h], with a pole
+/// at each end; `rings` latitude rings, `segments` vertices per ring.
+fn revolution(r: impl Fn(f64) -> f64, h: f64, rings: usize, segments: usize) -> SurfaceMesh {
+    let mut positions = vec![[0.0, 0.0, -h]];
+    for i in 1..rings {
+        let z = -h + 2.0 * h * i as f64 / rings as f64;
+        for j in 0..segments {
+            let a = 2.0 * PI * j as f64 / segments as f64;
+            positions.push([r(z) * a.cos(), r(z) * a.sin(), z]);
+        }
+    }
+    positions.push([0.0, 0.0, h]);
+    let top = (positions.len() - 1) as u32;
+    let ring = |i: usize, j: usize| (1 + (i - 1) * segments + j % segments) as u32;
+    let mut triangles = Vec::new();
+    for j in 0..segments {
+        triangles.push([0, ring(1, j + 1), ring(1, j)]);
+        triangles.push([top, ring(rings - 1, j), ring(rings - 1, j + 1)]);
+    }
+    for i in 1..rings - 1 {
+        for j in 0..segments {
+            triangles.push([ring(i, j), ring(i, j + 1), ring(i + 1, j + 1)]);
+            triangles.push([ring(i, j), ring(i + 1, j + 1), ring(i + 1, j)]);
+        }
+    }
+    SurfaceMesh::new(positions, triangles).unwrap()
+}
+
+/// Profile with its narrowest circle, radius 0.2, at z = 0; capped towards the poles.
+fn waist(z: f64) -> f64 {
+    let h: f64 = 1.0;
+    (0.2 + 0.6 * z * z) * (1.0 - (z / h).powi(8)).max(0.0).sqrt()
+}
+
+#[test]
+fn tightening_a_tilted_loop_finds_the_narrowest_circle_of_a_surface_of_revolution() {
+    let segments = 200;
+    let mesh = revolution(waist, 1.0, 201, segments);
+    let topology = Topology::new(&mesh);
+    let geometry = SurfaceGeometry::new(&mesh, &topology);
+    let tilt: f64 = 0.35;
+    let plane = Plane {
+        origin: [0.0, 0.0, 0.0],
+        normal: [0.0, tilt.sin(), tilt.cos()],
+    };
+    let curves = plane_cut(&mesh, &topology, &plane);
+    let i = loop_around(&mesh, &topology, &plane, &curves, plane.origin).unwrap();
+    let t = tighten(
+        &geometry,
+        &curves[i].crossings,
+        &curves[i].faces,
+        &TightenOptions::default(),
+    );
+    // The polygonal ring at z = 0 is the mesh's own narrowest circle.
+    let ring = 2.0 * segments as f64 * 0.2 * (PI / segments as f64).sin();
+    eprintln!(
+        "{:?} rounds {} updates {} length {} initial {} ring {} turn {} vangle {}",
+        t.status,
+        t.rounds,
+        t.updates,
+        t.length,
+        t.initial_length,
+        ring,
+        t.max_edge_turn,
+        t.min_vertex_angle
+    );
+    assert_eq!(t.status, TightenStatus::Converged);
+    assert!(t.initial_length > 1.03 * ring);
+    assert!((t.length - 2.0 * PI * 0.2).abs() < 0.005 * 2.0 * PI * 0.2);
+    assert!(t.initial_length > 1.03 * ring);
+    check_geodesic(
+        &mesh,
+        &topology,
+        &t.points,
+        &t.surface_points,
+        t.length,
+        t.initial_length,
+        &t,
+    );
+}
+
+/// The properties every tightened loop must have: closed polyline of surface points that
+/// lie on mesh edges or vertices, no longer than the start, simple, straight across
+/// every edge and with both angles ≥ π at every vertex it passes.
+fn check_geodesic(
+    mesh: &SurfaceMesh,
+    topology: &Topology,
+    points: &[[f64; 3]],
+    surface_points: &[SurfacePoint],
+    length: f64,
+    initial_length: f64,
+    t: &impl TighteningDiagnostics,
+) {
+    assert!(points.len() >= 3);
+    assert_eq!(points.len(), surface_points.len());
+    assert_ne!(points.first(), points.last(), "first point not repeated");
+    assert!((closed_length(points) - length).abs() <= 1e-9 * length);
+    assert!(
+        length <= initial_length * (1.0 + 1e-12),
+        "{length} > {initial_length}"
+    );
+    let edges: std::collections::HashSet<[u32; 2]> = topology.edges().iter().copied().collect();
+    for (p, s) in points.iter().zip(surface_points) {
+        let q = match *s {
+            SurfacePoint::Vertex { vertex } => mesh.positions[vertex as usize],
+            SurfacePoint::Edge { edge, t } => {
+                assert!(edges.contains(&edge), "point on a mesh edge");
+                assert!((0.0..=1.0).contains(&t));
+                let (a, b) = (
+                    mesh.positions[edge[0] as usize],
+                    mesh.positions[edge[1] as usize],
+                );
+                [0, 1, 2].map(|k| a[k] + t * (b[k] - a[k]))
+            }
+        };
+        assert!(
+            (0..3).all(|k| (p[k] - q[k]).abs() < 1e-12),
+            "on the surface"
+        );
+    }
+    let (turn, vertex_angle, simple) = t.diagnostics();
+    assert!(simple, "simple");
+    assert!(turn < 1e-6, "straight across edges: turn {turn}");
+    assert!(
+        vertex_angle >= PI - 1e-5,
+        "both angles >= pi at vertices: {vertex_angle}"
+    );
+}
+
+trait TighteningDiagnostics {
+    fn diagnostics(&self) -> (f64, f64, bool);
+}
+
+impl TighteningDiagnostics for Tightened {
+    fn diagnostics(&self) -> (f64, f64, bool) {
+        (self.max_edge_turn, self.min_vertex_angle, self.simple)
+    }
+}
+
+impl TighteningDiagnostics for NeckLoop {
+    fn diagnostics(&self) -> (f64, f64, bool) {
+        let t = &self.tightening;
+        (t.max_edge_turn, t.min_vertex_angle, t.simple)
+    }
+}
+
+fn check_loop(mesh: &SurfaceMesh, topology: &Topology, l: &NeckLoop) {
+    check_geodesic(
+        mesh,
+        topology,
+        &l.points,
+        &l.surface_points,
+        l.length,
+        l.initial_length,
+        l,
+    );
+    assert!((l.radius - l.length / (2.0 * PI)).abs() < 1e-12);
+    assert!((norm(l.normal) - 1.0).abs() < 1e-9);
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+}
+
+/// Winding number of a loop's projection on the xy-plane around the point (x, y).
+fn winding_xy(points: &[[f64; 3]], x: f64, y: f64) -> i64 {
+    let n = points.len();
+    let mut total = 0.0;
+    for i in 0..n {
+        let (a, b) = (points[i], points[(i + 1) % n]);
+        let a1 = (a[1] - y).atan2(a[0] - x);
+        let b1 = (b[1] - y).atan2(b[0] - x);
+        let mut d = b1 - a1;
+        if d > PI {
+            d -= 2.0 * PI;
+        }
+        if d < -PI {
+            d += 2.0 * PI;
+        }
+        total += d;
+    }
+    (total / (2.0 * PI)).round() as i64
+}
+
+fn necks(shape: &Shape, handles: bool, tunnels: bool, steps: usize) -> NeckReport {
+    let mesh = shape.mesh().unwrap();
+    let options = NeckOptions {
+        handles,
+        tunnels,
+        morse: MorseOptions {
+            steps,
+            ..MorseOptions::default()
+        },
+        ..NeckOptions::default()
+    };
+    let report = find_necks(&mesh, &options).unwrap();
+    let topology = Topology::new(&mesh);
+    for l in &report.loops {
+        check_loop(&mesh, &topology, l);
+    }
+    assert!(report.morse.iter().all(|m| m.ok));
+    report
+}
+
+fn of_kind(report: &NeckReport, kind: LoopKind) -> Vec<&NeckLoop> {
+    report.loops.iter().filter(|l| l.kind == kind).collect()
+}
+
+#[test]
+fn a_dumbbell_has_one_handle_loop_around_its_neck_and_no_tunnel() {
+    let shape = Shape::new(ShapeKind::Dumbbell);
+    let r = necks(&shape, true, true, 20);
+    let handles = of_kind(&r, LoopKind::Handle);
+    assert_eq!(handles.len(), 1, "{:?}", r.dropped);
+    assert!(of_kind(&r, LoopKind::Tunnel).is_empty());
+    let l = handles[0];
+    let expected = 2.0 * PI * shape.param("neck");
+    assert!(
+        (l.length - expected).abs() < 0.005 * expected,
+        "{} vs {expected}",
+        l.length
+    );
+    assert!(dist(l.center, [0.0; 3]) < 0.02, "{:?}", l.center);
+    assert!(l.normal[0].abs() > 0.99);
+}
+
+#[test]
+fn a_chain_of_three_balls_has_two_handle_loops() {
+    let r = necks(&Shape::new(ShapeKind::Chain), true, false, 20);
+    let handles = of_kind(&r, LoopKind::Handle);
+    assert_eq!(handles.len(), 2, "{:?}", r.dropped);
+    let mut xs: Vec<f64> = handles.iter().map(|l| l.center[0]).collect();
+    xs.sort_by(f64::total_cmp);
+    assert!(
+        (xs[0] + 0.9).abs() < 0.02 && (xs[1] - 0.9).abs() < 0.02,
+        "{xs:?}"
+    );
+}
+
+#[test]
+fn a_varying_torus_has_a_handle_at_its_thin_side_and_a_tunnel_around_its_hole() {
+    let shape = Shape::new(ShapeKind::VaryingTorus);
+    let r = necks(&shape, true, true, 20);
+    let handles = of_kind(&r, LoopKind::Handle);
+    assert_eq!(handles.len(), 1, "{:?}", r.dropped);
+    let thin = 2.0 * PI * shape.param("r0") * (1.0 - shape.param("a"));
+    assert!(
+        (handles[0].length - thin).abs() < 0.01 * thin,
+        "{}",
+        handles[0].length
+    );
+    assert!(dist(handles[0].center, [-1.0, 0.0, 0.0]) < 0.02);
+    let tunnels = of_kind(&r, LoopKind::Tunnel);
+    assert_eq!(tunnels.len(), 1, "{:?}", r.dropped);
+    assert_eq!(winding_xy(&tunnels[0].points, 0.0, 0.0).abs(), 1);
+    assert!(tunnels[0].normal[2].abs() > 0.99);
+}
+
+#[test]
+fn an_eight_has_two_handle_loops_of_the_tube_radius_and_two_tunnels() {
+    let shape = Shape::new(ShapeKind::Eight);
+    let r = necks(&shape, true, true, 50);
+    let handles = of_kind(&r, LoopKind::Handle);
+    assert_eq!(handles.len(), 2, "{:?}", r.dropped);
+    let tube = 2.0 * PI * shape.param("r");
+    for l in &handles {
+        assert!((l.length - tube).abs() < 0.01 * tube, "{}", l.length);
+    }
+    let tunnels = of_kind(&r, LoopKind::Tunnel);
+    assert_eq!(tunnels.len(), 2, "{:?}", r.dropped);
+    let c = shape.param("c");
+    let around: Vec<(i64, i64)> = tunnels
+        .iter()
+        .map(|l| {
+            (
+                winding_xy(&l.points, -c, 0.0).abs(),
+                winding_xy(&l.points, c, 0.0).abs(),
+            )
+        })
+        .collect();
+    assert!(
+        around.contains(&(1, 0)) && around.contains(&(0, 1)),
+        "{around:?}"
+    );
+}
+
+#[test]
+fn a_sphere_has_no_loop_inside_or_outside() {
+    let r = necks(&Shape::new(ShapeKind::Sphere), true, true, 20);
+    assert!(r.loops.is_empty());
+    assert!(r.dropped.is_empty());
+}
+
+#[test]
+fn a_loop_that_slides_off_a_cap_is_dropped_as_collapsed() {
+    let mesh = Shape::new(ShapeKind::Sphere).mesh().unwrap();
+    // A small circle of a round sphere shrinks to a point when shortened.
+    let seeds = [Seed {
+        position: [0.0, 0.0, 0.5],
+        normal: [0.0, 0.0, 1.0],
+        persistence: 10,
+    }];
+    let r = find_loops(&mesh, &seeds, LoopKind::Handle, &LoopOptions::default()).unwrap();
+    assert!(r.loops.is_empty());
+    assert_eq!(r.dropped.len(), 1);
+    assert!(
+        matches!(r.dropped[0].reason, DropReason::Collapsed { .. }),
+        "{:?}",
+        r.dropped
+    );
+}
+
+#[test]
+fn a_plane_that_misses_the_saddle_gives_a_reasoned_drop_and_bad_seeds_an_error() {
+    let mesh = Shape::new(ShapeKind::Sphere).mesh().unwrap();
+    let outside = [Seed {
+        position: [3.0, 0.0, 0.0],
+        normal: [0.0, 0.0, 1.0],
+        persistence: 5,
+    }];
+    let r = find_loops(&mesh, &outside, LoopKind::Tunnel, &LoopOptions::default()).unwrap();
+    assert!(matches!(
+        r.dropped[0].reason,
+        DropReason::NoLoopAroundSaddle {
+            closed_curves: 1,
+            ..
+        }
+    ));
+    let zero = [Seed {
+        normal: [0.0; 3],
+        ..outside[0]
+    }];
+    let e = find_loops(&mesh, &zero, LoopKind::Handle, &LoopOptions::default()).unwrap_err();
+    assert_eq!(e.kind(), necklace::ErrorKind::InvalidArgument);
+    let bad = LoopOptions {
+        max_length: -1.0,
+        ..LoopOptions::default()
+    };
+    assert!(find_loops(&mesh, &outside, LoopKind::Handle, &bad).is_err());
+}
+
+#[test]
+fn plane_cuts_through_vertices_still_give_closed_curves() {
+    // The revolution mesh has whole rings of vertices exactly on z = ±k·h.
+    let mesh = revolution(waist, 1.0, 20, 16);
+    let topology = Topology::new(&mesh);
+    let z = -1.0 + 2.0 * 10.0 / 20.0;
+    let plane = Plane {
+        origin: [0.0, 0.0, z],
+        normal: [0.0, 0.0, 1.0],
+    };
+    let curves = plane_cut(&mesh, &topology, &plane);
+    assert_eq!(curves.len(), 1);
+    assert!(curves[0].closed);
+    let ring = 2.0 * 16.0 * waist(z) * (PI / 16.0).sin();
+    assert!((closed_length(&curves[0].points(&mesh, &topology)) - ring).abs() < 1e-9);
+}
+
+#[test]
+fn loops_do_not_depend_on_the_thread_count_and_duplicates_merge() {
+    let shape = Shape::new(ShapeKind::Torus);
+    let mesh = shape.mesh().unwrap();
+    // Twelve seeds on the same meridian plane: one loop, eleven duplicates.
+    let seeds: Vec<Seed> = (0..12)
+        .map(|i| Seed {
+            position: [1.0 + 0.01 * i as f64, 0.0, 0.0],
+            normal: [0.0, 1.0, 0.0],
+            persistence: 10 + i % 3,
+        })
+        .collect();
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                find_loops(&mesh, &seeds, LoopKind::Handle, &LoopOptions::default()).unwrap()
+            })
+    };
+    let (a, b) = (run(1), run(2));
+    assert_eq!(a.loops, b.loops);
+    assert_eq!(a.dropped, b.dropped);
+    assert_eq!(a.loops.len(), 1);
+    assert_eq!(a.loops[0].duplicates.len(), 11);
+    assert_eq!(
+        a.loops[0].persistence, 12,
+        "the most persistent seed is kept"
+    );
+    let tube = 2.0 * PI * shape.param("r");
+    assert!((a.loops[0].length - tube).abs() < 0.01 * tube);
+}
+
+#[test]
+fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
+    let dir =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        println!("SKIPPED: no mesh folder at {}", dir.display());
+        return;
+    };
+    let mut files: Vec<_> = entries
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e != "tsv" && e != "md"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 21);
+    let mut total = 0;
+    for file in files {
+        let mesh = necklace::io::read_mesh(&file).unwrap();
+        let (mesh, _, _) = necklace::pipeline::orient_for_volume(mesh);
+        let r = find_necks(&mesh, &NeckOptions::default()).unwrap();
+        let topology = Topology::new(&mesh);
+        for l in &r.loops {
+            check_loop(&mesh, &topology, l);
+        }
+        // Every selected saddle ends as a loop or a reasoned drop.
+        let saddles: usize = r.sides.iter().map(|s| s.saddles.len()).sum();
+        assert_eq!(
+            saddles,
+            r.loops.len() + r.dropped.len(),
+            "{}",
+            file.display()
+        );
+        println!(
+            "{}: {} loops, {} dropped",
+            file.display(),
+            r.loops.len(),
+            r.dropped.len()
+        );
+        total += r.loops.len();
+    }
+    assert!(total > 50);
+}
