@@ -9,9 +9,11 @@
 use std::collections::BTreeMap;
 
 use necklace::io;
-use necklace::loops::{find_loops, LoopKind, LoopOptions, Seed};
+use necklace::loops::{find_loops, LoopKind, LoopOptions};
 use necklace::morse::MorseOptions;
-use necklace::pipeline::{critical_points, orient_for_volume, volume_mesh, Side, VolumeOptions};
+use necklace::pipeline::{
+    critical_points, loop_seeds, orient_for_volume, volume_mesh, Side, VolumeOptions,
+};
 
 mod common;
 
@@ -29,15 +31,7 @@ fn main() {
         for side in [Side::Inside, Side::Outside] {
             let volume = volume_mesh(&surface, side, &VolumeOptions::default()).expect("meshing");
             let r = critical_points(&surface, &volume, &MorseOptions::default()).expect("morse");
-            let seeds: Vec<Seed> = r
-                .saddles
-                .iter()
-                .map(|s| Seed {
-                    position: s.position,
-                    normal: s.normal,
-                    persistence: s.persistence,
-                })
-                .collect();
+            let seeds = loop_seeds(&r);
             let kind = match side {
                 Side::Inside => LoopKind::Handle,
                 Side::Outside => LoopKind::Tunnel,

@@ -790,6 +790,21 @@ pub struct NeckTimings {
     pub total: StageTimings,
 }
 
+/// The loop stage's seeds from the Morse stage's selected 2-saddles, in their order:
+/// the plane through each saddle's fitted position with its Hessian's positive
+/// eigenvector as normal.
+pub fn loop_seeds(result: &MorseResult) -> Vec<Seed> {
+    result
+        .saddles
+        .iter()
+        .map(|s| Seed {
+            position: s.position,
+            normal: s.normal,
+            persistence: s.persistence,
+        })
+        .collect()
+}
+
 /// The whole method on a closed, outward-oriented surface (see [`prepare_surface`]):
 /// for each side asked for, volume mesh → distance field → smoothing and critical
 /// points → neck loops on `surface`.
@@ -824,16 +839,7 @@ pub fn find_necks(surface: &SurfaceMesh, options: &NeckOptions) -> Result<NeckRe
         let field = distance_field(surface, &volume.mesh);
         let distance_seconds = start.elapsed().as_secs_f64();
         let result = morse::analyze(&volume.mesh, &field, &options.morse)?;
-        let seeds: Vec<Seed> = result
-            .saddles
-            .iter()
-            .map(|s| Seed {
-                position: s.position,
-                normal: s.normal,
-                persistence: s.persistence,
-            })
-            .collect();
-        let found = loops::find_loops(surface, &seeds, kind, &options.loops)?;
+        let found = loops::find_loops(surface, &loop_seeds(&result), kind, &options.loops)?;
 
         let t = &result.timings;
         let l = &found.timings;

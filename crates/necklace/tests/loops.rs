@@ -1,6 +1,8 @@
 //! Neck loops (sec. 4.3): plane cut, tightening and selection against shapes whose
 //! narrowest loops are known in closed form.
 
+mod common;
+
 use std::f64::consts::PI;
 
 use necklace::loops::cut::{closed_length, loop_around, plane_cut, Plane};
@@ -413,18 +415,9 @@ fn loops_do_not_depend_on_the_thread_count_and_duplicates_merge() {
 
 #[test]
 fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
-    let dir =
-        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes");
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        println!("SKIPPED: no mesh folder at {}", dir.display());
+    let Some(files) = common::shared_meshes() else {
         return;
     };
-    let mut files: Vec<_> = entries
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e != "tsv" && e != "md"))
-        .collect();
-    files.sort();
-    assert_eq!(files.len(), 21);
     let mut total = 0;
     for file in files {
         let mesh = necklace::io::read_mesh(&file).unwrap();

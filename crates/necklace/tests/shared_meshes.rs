@@ -2,16 +2,10 @@
 //! flags its MANIFEST.tsv lists (computed independently with trimesh). Skips, saying
 //! so, when the folder is absent; CI always has it.
 
-use std::path::PathBuf;
-
 use necklace::{io, MeshReport};
 
-fn meshes_dir() -> PathBuf {
-    match std::env::var_os("NECKLACE_MESHES") {
-        Some(dir) => PathBuf::from(dir),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes"),
-    }
-}
+mod common;
+use common::meshes_dir;
 
 #[test]
 fn shared_meshes_match_the_manifest() {

@@ -1,8 +1,9 @@
 //! Volume meshes of real and generated surfaces through the pipeline (exact distance,
 //! winding-number sign, thin-part refinement), against invariants and closed forms.
 
+mod common;
+
 use std::f64::consts::PI;
-use std::path::PathBuf;
 
 use necklace::morse::{MorseOptions, SolverOptions};
 use necklace::pipeline::{
@@ -120,17 +121,9 @@ fn two_overlapping_spheres_mesh_as_their_union() {
 
 #[test]
 fn every_shared_mesh_meshes_as_a_manifold_and_passes_the_morse_check_in_both_modes() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes");
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        println!("SKIPPED: no mesh folder at {}", dir.display());
+    let Some(files) = common::shared_meshes() else {
         return;
     };
-    let mut files: Vec<PathBuf> = entries
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e != "tsv" && e != "md"))
-        .collect();
-    files.sort();
-    assert_eq!(files.len(), 21);
     for file in files {
         let surface = io::read_mesh(&file).unwrap();
         let (surface, surface_report, _) = necklace::pipeline::orient_for_volume(surface);

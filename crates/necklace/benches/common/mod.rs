@@ -18,13 +18,12 @@ pub fn shared_meshes() -> Option<Vec<PathBuf>> {
         .unwrap_or_else(|| {
             PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes")
         });
-    let Ok(entries) = std::fs::read_dir(&dir) else {
+    let Ok(files) = necklace::io::mesh_files(&dir) else {
         println!("no mesh folder at {}", dir.display());
         return None;
     };
-    let mut files: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e != "tsv" && e != "md"))
+    let files = files
+        .into_iter()
         .filter(|p| {
             only.as_ref().is_none_or(|o| {
                 p.file_name()
@@ -32,6 +31,5 @@ pub fn shared_meshes() -> Option<Vec<PathBuf>> {
             })
         })
         .collect();
-    files.sort();
     Some(files)
 }

@@ -100,6 +100,27 @@ impl Format {
     }
 }
 
+/// The mesh files of a folder (extension .obj, .off, .ply or .stl, any case), sorted by
+/// name; other files are skipped. Errors name the folder.
+pub fn mesh_files(dir: impl AsRef<Path>) -> Result<Vec<std::path::PathBuf>> {
+    let dir = dir.as_ref();
+    let entries = std::fs::read_dir(dir).map_err(|e| {
+        Error::new(ErrorKind::Io, format!("cannot list the folder: {e}")).in_file(dir)
+    })?;
+    let mut files = Vec::new();
+    for entry in entries {
+        let entry = entry.map_err(|e| {
+            Error::new(ErrorKind::Io, format!("cannot list the folder: {e}")).in_file(dir)
+        })?;
+        let path = entry.path();
+        if path.is_file() && Format::from_extension(&path).is_some() {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
 /// Read a mesh file. The format comes from the extension, or from the content when the
 /// extension is missing or unknown. Errors name the file.
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<SurfaceMesh> {

@@ -1,11 +1,34 @@
-//! Analytic domains shared by the integration tests: the inside of a generated shape,
-//! and the shell between it and a sphere of a given radius at the origin. Each test
-//! binary compiles this module and uses only part of it.
+//! What the integration tests share: the shared real meshes, and analytic domains (the
+//! inside of a generated shape, and the shell between it and a sphere of a given
+//! radius at the origin). Each test binary compiles this module and uses only part of it.
 #![allow(dead_code)]
+
+use std::path::PathBuf;
 
 use necklace::shapes::Shape;
 use necklace::volume::Domain;
 use necklace::VertexKind;
+
+/// The folder of shared real meshes: `$NECKLACE_MESHES`, else `../shared/data/meshes`
+/// beside the repository.
+pub fn meshes_dir() -> PathBuf {
+    match std::env::var_os("NECKLACE_MESHES") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes"),
+    }
+}
+
+/// The 21 shared mesh files, sorted; `None` (after printing SKIPPED) when the folder is
+/// absent.
+pub fn shared_meshes() -> Option<Vec<PathBuf>> {
+    let dir = meshes_dir();
+    let Ok(files) = necklace::io::mesh_files(&dir) else {
+        println!("SKIPPED: no mesh folder at {}", dir.display());
+        return None;
+    };
+    assert_eq!(files.len(), 21, "shared meshes in {}", dir.display());
+    Some(files)
+}
 
 /// The inside of an analytic shape.
 pub struct Inside(pub Shape);
