@@ -12,9 +12,16 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use necklace::morse::MorseOptions;
+use necklace::output::OutputOptions;
 use necklace::pipeline::{self, Mesher, Side, VolumeOptions};
+use necklace::render::RenderOptions;
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::{io, MeshReport};
+use progress::Bars;
+
+mod bench;
+mod demo;
+mod progress;
 
 #[derive(Parser)]
 #[command(
@@ -25,6 +32,12 @@ use necklace::{io, MeshReport};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// No progress bars.
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    /// Print seconds per stage and side to stderr.
+    #[arg(short, long, global = true)]
+    verbose: bool,
 }
 
 #[derive(Subcommand)]
@@ -106,12 +119,64 @@ enum Command {
         /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
         #[arg(long)]
         h: Option<f64>,
-        /// Write loops.obj (one `l` polyline per loop) and loops.json into this folder.
+        /// Write loops.obj, loops.ply, loops.json and critical.ply into this folder.
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// Also write view.png (a picture of the surface and its loops) into the folder.
+        #[arg(long, requires = "output")]
+        png: bool,
+        /// Also write field.vtu (volume meshes with the smoothed field) into the folder.
+        #[arg(long, requires = "output")]
+        volume: bool,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
+    },
+    /// Draw a mesh with loops and saddles from several directions into a PNG.
+    Render {
+        /// The surface mesh.
+        mesh: PathBuf,
+        /// loops.json written by `necklace loops -o DIR`.
+        #[arg(long)]
+        loops: Option<PathBuf>,
+        /// Saddles to draw as dots: the JSON of `necklace critical --json`, or a loops.json.
+        #[arg(long)]
+        critical: Option<PathBuf>,
+        /// Output picture (.png).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Width in pixels.
+        #[arg(long, default_value_t = 1200)]
+        size: u32,
+        /// Number of views: three-quarter, front, side, top (1 to 4).
+        #[arg(long, default_value_t = 4)]
+        views: usize,
+        /// Opacity of the surface over loops and saddles behind it (0 to 1).
+        #[arg(long, default_value_t = 0.7)]
+        opacity: f64,
+    },
+    /// Run the whole method on built-in shapes (a chain of balls, a varying torus, a
+    /// genus-3 pretzel): tables, loops and pictures; no input file needed.
+    Demo {
+        /// Folder for the results (one subfolder per shape).
+        #[arg(short, long, default_value = "necklace-demo")]
+        output: PathBuf,
+    },
+    /// Time every mesh of a folder in both modes (stages named as in the paper's
+    /// Table 1), then a series over the lattice spacing h on one model.
+    Bench {
+        /// Folder of meshes (.obj, .off, .ply, .stl).
+        dir: PathBuf,
+        /// Also write the table as CSV; the h series goes beside it as
+        /// NAME-scaling.csv and NAME-scaling.png.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+        /// Model of the h series (part of its file name; default bunny, else the first).
+        #[arg(long)]
+        scaling: Option<String>,
+        /// Skip the h series.
+        #[arg(long)]
+        no_scaling: bool,
     },
     /// Generate an analytic test shape with known necks and write it as a mesh.
     Shape {
@@ -149,7 +214,11 @@ fn parse_param(s: &str) -> std::result::Result<(String, f64), String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match run(cli) {
+    let ui = Ui {
+        bars: Bars::new(!cli.quiet),
+        verbose: cli.verbose,
+    };
+    match run(cli.command, &ui) {
         Ok(text) => {
             // A closed pipe (`necklace ... | head`) is not an error worth a message.
             let _ = std::io::stdout().lock().write_all(text.as_bytes());
@@ -167,9 +236,17 @@ fn main() -> ExitCode {
     }
 }
 
+/// What every command may use to talk to the user besides its output.
+pub struct Ui {
+    /// Progress bars (hidden unless stderr is a terminal and not --quiet).
+    pub bars: Bars,
+    /// -v: stage timings on stderr.
+    pub verbose: bool,
+}
+
 /// Run a command; the text it returns goes to stdout.
-fn run(cli: Cli) -> Result<String> {
-    match cli.command {
+fn run(command: Command, ui: &Ui) -> Result<String> {
+    match command {
         Command::Info { mesh, json } => info(mesh, json),
         Command::Volume {
             mesh,
@@ -217,6 +294,8 @@ fn run(cli: Cli) -> Result<String> {
             tau,
             h,
             output,
+            png,
+            volume,
             json,
         } => {
             let options = pipeline::NeckOptions {
@@ -232,10 +311,39 @@ fn run(cli: Cli) -> Result<String> {
                     tau,
                     ..MorseOptions::default()
                 },
+                keep_volume: volume,
                 ..pipeline::NeckOptions::default()
             };
-            loops(mesh, &options, output, json)
+            let files = OutputOptions {
+                picture: png.then(RenderOptions::default),
+                volume,
+            };
+            loops(mesh, &options, output.map(|o| (o, files)), json, ui)
         }
+        Command::Render {
+            mesh,
+            loops,
+            critical,
+            output,
+            size,
+            views,
+            opacity,
+        } => {
+            let options = RenderOptions {
+                size,
+                views,
+                opacity,
+                ..RenderOptions::default()
+            };
+            render(mesh, loops, critical, output, &options)
+        }
+        Command::Demo { output } => demo::run(&output, ui),
+        Command::Bench {
+            dir,
+            csv,
+            scaling,
+            no_scaling,
+        } => bench::run(&dir, csv.as_deref(), (!no_scaling).then_some(scaling), ui),
         Command::Shape {
             name,
             params,
@@ -365,11 +473,49 @@ fn critical(
 fn loops(
     path: PathBuf,
     options: &pipeline::NeckOptions,
-    output: Option<PathBuf>,
+    output: Option<(PathBuf, OutputOptions)>,
     json: bool,
+    ui: &Ui,
 ) -> Result<String> {
     let (surface, _) = read_for_volume(&path)?;
-    let report = pipeline::find_necks(&surface, options)?;
+    let report = pipeline::find_necks_with_progress(&surface, options, &ui.bars)?;
+    warn_morse_failures(&report);
+    if ui.verbose {
+        eprint!("{}", stage_timings(&report));
+    }
+    let mut written = Vec::new();
+    if let Some((dir, files)) = &output {
+        written = necklace::output::write_run(dir, &surface, &report, files, Some(&path))?;
+    }
+    if json {
+        let value = necklace::output::report_json(&report, Some(&path))?;
+        return Ok(serde_json::to_string_pretty(&value)? + "\n");
+    }
+    let mut out = format!("{}: {} loops\n", path.display(), report.loops.len());
+    out += &loops_table(&report)?;
+    for check in &report.morse {
+        let _ = writeln!(
+            out,
+            "Morse check {:?}: {} ({} steps)",
+            check.side,
+            if check.ok { "ok" } else { "FAILED" },
+            check.steps.len()
+        );
+    }
+    let t = &report.timings.total;
+    let _ = writeln!(
+        out,
+        "seconds: volume mesh {:.2}, distance {:.2}, smoothing {:.2}, critical points {:.2}, loops {:.3}, total {:.2}",
+        t.volume_mesh, t.distance, t.smoothing, t.critical_points, t.loops, t.total
+    );
+    for file in written {
+        let _ = writeln!(out, "-> {}", file.display());
+    }
+    Ok(out)
+}
+
+/// Print Morse-check failures to stderr.
+fn warn_morse_failures(report: &pipeline::NeckReport) {
     for check in &report.morse {
         for step in check.steps.iter().filter(|s| !s.morse_ok) {
             eprintln!(
@@ -378,34 +524,26 @@ fn loops(
             );
         }
     }
-    let text = serde_json::to_string_pretty(&report)? + "\n";
-    if let Some(dir) = &output {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
-        let lines: Vec<Vec<[f64; 3]>> = report.loops.iter().map(|l| l.points.clone()).collect();
-        let names: Vec<String> = report
-            .loops
-            .iter()
-            .enumerate()
-            .map(|(i, l)| {
-                format!(
-                    "{}_{i}",
-                    serde_json::to_value(l.kind)
-                        .ok()
-                        .and_then(|v| v.as_str().map(String::from))
-                        .unwrap_or_default()
-                )
-            })
-            .collect();
-        io::write_polylines(dir.join("loops.obj"), &lines, &names)?;
-        std::fs::write(dir.join("loops.json"), &text)
-            .with_context(|| format!("cannot write {}", dir.join("loops.json").display()))?;
-    }
-    if json {
-        return Ok(text);
-    }
+}
+
+/// Seconds per stage and side (for -v).
+pub fn stage_timings(report: &pipeline::NeckReport) -> String {
     let mut out = String::new();
-    let _ = writeln!(out, "{}: {} loops", path.display(), report.loops.len());
+    for side in &report.sides {
+        let t = &side.timings;
+        let _ = writeln!(
+            out,
+            "necklace: {:?}: {} vertices, {} tets, {} unknowns; seconds: volume mesh {:.3}, distance {:.3}, smoothing {:.3}, critical points {:.3}, loops {:.3}, total {:.3}",
+            side.side, side.volume.vertices, side.volume.tets, side.unknowns,
+            t.volume_mesh, t.distance, t.smoothing, t.critical_points, t.loops, t.total
+        );
+    }
+    out
+}
+
+/// The loops and drops of a report as a text table.
+pub fn loops_table(report: &pipeline::NeckReport) -> Result<String> {
+    let mut out = String::new();
     let _ = writeln!(
         out,
         "  #  kind    length      radius    centre                          persistence  tightening"
@@ -441,29 +579,41 @@ fn loops(
             );
         }
     }
-    for check in &report.morse {
-        let _ = writeln!(
-            out,
-            "Morse check {:?}: {} ({} steps)",
-            check.side,
-            if check.ok { "ok" } else { "FAILED" },
-            check.steps.len()
-        );
-    }
-    let t = &report.timings.total;
-    let _ = writeln!(
-        out,
-        "seconds: volume mesh {:.2}, distance {:.2}, smoothing {:.2}, critical points {:.2}, loops {:.3}, total {:.2}",
-        t.volume_mesh, t.distance, t.smoothing, t.critical_points, t.loops, t.total
-    );
-    if let Some(dir) = output {
-        let _ = writeln!(out, "loops -> {}", dir.join("loops.obj").display());
-    }
     Ok(out)
 }
 
+fn render(
+    mesh: PathBuf,
+    loops: Option<PathBuf>,
+    critical: Option<PathBuf>,
+    output: PathBuf,
+    options: &RenderOptions,
+) -> Result<String> {
+    let surface = io::read_mesh(&mesh)?;
+    let curves = match &loops {
+        Some(path) => necklace::output::read_loops_json(path)?,
+        None => Vec::new(),
+    };
+    let saddles = match &critical {
+        Some(path) => necklace::output::read_points_json(path)?,
+        None => Vec::new(),
+    };
+    let scene = necklace::output::loop_scene(&surface, &curves, &saddles);
+    let rendered = necklace::render::render(&scene, options)?;
+    rendered.image.write_png(&output)?;
+    Ok(format!(
+        "{}: {} loops, {} saddles, {} x {} pixels -> {}\n",
+        mesh.display(),
+        curves.len(),
+        saddles.len(),
+        rendered.image.width,
+        rendered.image.height,
+        output.display()
+    ))
+}
+
 /// Read a mesh and orient it for volume meshing, warning about what is unusual.
-fn read_for_volume(path: &PathBuf) -> Result<(necklace::SurfaceMesh, MeshReport)> {
+pub fn read_for_volume(path: &PathBuf) -> Result<(necklace::SurfaceMesh, MeshReport)> {
     let (surface, surface_report, flipped) = pipeline::orient_for_volume(io::read_mesh(path)?);
     // The mesher follows the winding number, so open or self-intersecting input is
     // meshed as the solid it bounds; say what is unusual about it.

@@ -32,7 +32,10 @@ pub mod io;
 pub mod loops;
 pub mod mesh;
 pub mod morse;
+pub mod output;
 pub mod pipeline;
+pub mod progress;
+pub mod render;
 pub mod shapes;
 pub mod tet;
 #[cfg(feature = "tetgen")]

@@ -28,6 +28,7 @@ use crate::io;
 use crate::loops::{self, DropReason, DroppedLoop, LoopKind, LoopOptions, NeckLoop, Seed};
 use crate::mesh::{MeshReport, SurfaceMesh, Topology};
 use crate::morse::{self, MorseOptions, MorseResult, VertexType};
+use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 use crate::volume::{self, Domain, StuffingOptions, StuffingStats};
 
@@ -701,6 +702,10 @@ pub struct NeckOptions {
     pub morse: MorseOptions,
     /// Plane cut, tightening and loop selection.
     pub loops: LoopOptions,
+    /// Keep each side's volume mesh and smoothed field in the report
+    /// ([`SideReport::field`]), e.g. to write `field.vtu`. Default false (they can be
+    /// large).
+    pub keep_volume: bool,
 }
 
 impl Default for NeckOptions {
@@ -711,6 +716,7 @@ impl Default for NeckOptions {
             volume: VolumeOptions::default(),
             morse: MorseOptions::default(),
             loops: LoopOptions::default(),
+            keep_volume: false,
         }
     }
 }
@@ -762,6 +768,23 @@ pub struct SideReport {
     pub rejected: Vec<morse::RejectedSaddle>,
     /// Seconds per stage.
     pub timings: StageTimings,
+    /// Every critical point alive at the last step, with type, selection and
+    /// persistence (see [`critical_point_cloud`]); not in the JSON.
+    #[serde(skip)]
+    pub critical: io::PointCloud,
+    /// The volume mesh and the smoothed field on it, with
+    /// [`NeckOptions::keep_volume`]; not in the JSON.
+    #[serde(skip)]
+    pub field: Option<VolumeField>,
+}
+
+/// A volume mesh with a scalar per vertex.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VolumeField {
+    /// The tet mesh.
+    pub mesh: TetMesh,
+    /// One value per vertex.
+    pub values: Vec<f64>,
 }
 
 /// What [`find_necks`] found.
@@ -777,6 +800,8 @@ pub struct NeckReport {
     pub timings: NeckTimings,
     /// Per side: volume mesh, saddles, stage timings.
     pub sides: Vec<SideReport>,
+    /// Whether the input faces pointed inward and were flipped before meshing.
+    pub flipped: bool,
 }
 
 /// Stage timings per side and in total.
@@ -809,18 +834,37 @@ pub fn loop_seeds(result: &MorseResult) -> Vec<Seed> {
 /// for each side asked for, volume mesh → distance field → smoothing and critical
 /// points → neck loops on `surface`.
 pub fn find_necks(surface: &SurfaceMesh, options: &NeckOptions) -> Result<NeckReport> {
+    find_necks_with_progress(surface, options, &Silent)
+}
+
+/// [`find_necks`], reporting the stages that can take long (volume mesh, distance,
+/// smoothing steps, tightening) to `progress`.
+pub fn find_necks_with_progress(
+    surface: &SurfaceMesh,
+    options: &NeckOptions,
+    progress: &dyn Progress,
+) -> Result<NeckReport> {
     if !options.handles && !options.tunnels {
         return Err(Error::invalid_argument(
             "nothing to do: ask for handles, tunnels or both",
         ));
     }
-    let surface_report = MeshReport::new(surface);
+    if surface.triangles.is_empty() {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            "the surface has no triangles",
+        ));
+    }
+    // Inward-facing input is turned round rather than meshed inside out.
+    let (flipped_copy, surface_report, flipped) = orient_for_volume(surface.clone());
+    let surface = if flipped { &flipped_copy } else { surface };
     let mut report = NeckReport {
         loops: Vec::new(),
         dropped: Vec::new(),
         morse: Vec::new(),
         timings: NeckTimings::default(),
         sides: Vec::new(),
+        flipped,
     };
     let sides = [
         (Side::Inside, options.handles),
@@ -834,12 +878,27 @@ pub fn find_necks(surface: &SurfaceMesh, options: &NeckOptions) -> Result<NeckRe
             Side::Inside => LoopKind::Handle,
             Side::Outside => LoopKind::Tunnel,
         };
-        let volume = volume_mesh(surface, side, &options.volume)?;
+        let name = match side {
+            Side::Inside => "inside",
+            Side::Outside => "outside",
+        };
+        progress.start(&format!("volume mesh ({name})"), 0);
+        let volume = volume_mesh(surface, side, &options.volume);
+        progress.finish();
+        let volume = volume?;
+        progress.start(&format!("distance ({name})"), 0);
         let start = Instant::now();
         let field = distance_field(surface, &volume.mesh);
         let distance_seconds = start.elapsed().as_secs_f64();
-        let result = morse::analyze(&volume.mesh, &field, &options.morse)?;
-        let found = loops::find_loops(surface, &loop_seeds(&result), kind, &options.loops)?;
+        progress.finish();
+        let result = morse::analyze_with_progress(&volume.mesh, &field, &options.morse, progress)?;
+        let found = loops::find_loops_with_progress(
+            surface,
+            &loop_seeds(&result),
+            kind,
+            &options.loops,
+            progress,
+        )?;
 
         let t = &result.timings;
         let l = &found.timings;
@@ -890,9 +949,14 @@ pub fn find_necks(surface: &SurfaceMesh, options: &NeckOptions) -> Result<NeckRe
             side,
             volume: volume.report(),
             unknowns: result.unknowns,
+            critical: critical_point_cloud(&result),
             saddles: result.saddles,
             rejected: result.rejected,
             timings,
+            field: options.keep_volume.then_some(VolumeField {
+                mesh: volume.mesh,
+                values: result.field,
+            }),
         });
     }
     Ok(report)

@@ -1,12 +1,15 @@
 //! The import rules of ARCHITECTURE.md: data modules import only data modules, stages
-//! import only data modules (never another stage), only `pipeline` composes stages.
+//! import only data modules and services (never another stage), only the composers
+//! (`pipeline`, and `output` for the files and pictures of a run) import stages.
 
 use std::collections::BTreeSet;
 use std::path::Path;
 
-const DATA: &[&str] = &["error", "geom", "mesh", "tet"];
+const DATA: &[&str] = &["error", "geom", "mesh", "tet", "progress"];
 /// Shared queries over data that several stages need (imports data only).
 const SERVICES: &[&str] = &["distance"];
+/// Modules that may import everything; no other module imports them.
+const COMPOSERS: &[&str] = &["pipeline", "output"];
 const STAGES: &[&str] = &[
     "io", "shapes", "volume", "morse", "loops", "render", "tetgen",
 ];
@@ -48,7 +51,7 @@ fn modules_follow_the_import_rules() {
     for entry in std::fs::read_dir(&src).unwrap() {
         let path = entry.unwrap().path();
         let name = path.file_stem().unwrap().to_str().unwrap().to_string();
-        if name == "lib" || name == "pipeline" {
+        if name == "lib" || COMPOSERS.contains(&name.as_str()) {
             continue;
         }
         let imports = crate_imports(&path);
@@ -73,4 +76,22 @@ fn modules_follow_the_import_rules() {
         checked += 1;
     }
     assert!(checked >= 5);
+}
+
+#[test]
+fn no_module_imports_a_composer() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    for entry in std::fs::read_dir(&src).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_stem().unwrap().to_str().unwrap().to_string();
+        if name == "lib" {
+            continue;
+        }
+        for import in crate_imports(&path) {
+            assert!(
+                import == name || !COMPOSERS.contains(&import.as_str()) || name == "output",
+                "module {name} imports the composer crate::{import}"
+            );
+        }
+    }
 }

@@ -216,6 +216,35 @@ pub fn write_polylines(
         .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
 }
 
+/// Write closed polylines as binary PLY with an `edge` element: every vertex and edge
+/// carries the index of its polyline (`loop`), every vertex its polyline's colour
+/// (`colors[i]`, one per polyline).
+pub fn write_polylines_ply(
+    path: impl AsRef<Path>,
+    polylines: &[Vec<[f64; 3]>],
+    colors: &[[u8; 3]],
+) -> Result<()> {
+    let path = path.as_ref();
+    if Format::from_extension(path) != Some(Format::Ply) {
+        return Err(Error::new(
+            ErrorKind::UnknownFormat,
+            "polylines are written as PLY here: use a .ply file name",
+        )
+        .in_file(path));
+    }
+    if colors.len() != polylines.len() {
+        return Err(Error::invalid_argument(format!(
+            "{} colours for {} polylines",
+            colors.len(),
+            polylines.len()
+        )));
+    }
+    let mut out = Vec::new();
+    ply::write_polylines(polylines, colors, &mut out);
+    std::fs::write(path, out)
+        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+}
+
 /// The OBJ text of [`write_polylines`].
 pub fn polylines_obj(polylines: &[Vec<[f64; 3]>], names: &[String]) -> String {
     use std::fmt::Write as _;

@@ -704,3 +704,44 @@ pub(crate) fn write_points(points: &PointCloud, out: &mut Vec<u8>) {
         }
     }
 }
+
+/// Binary PLY of closed polylines: vertices `x y z` (double), `loop` (int: the
+/// polyline's index) and `red green blue` (uchar, the polyline's colour); edges
+/// `vertex1 vertex2 loop` (int), the last joining a polyline's end to its start.
+pub(crate) fn write_polylines(polylines: &[Vec<[f64; 3]>], colors: &[[u8; 3]], out: &mut Vec<u8>) {
+    let vertices: usize = polylines.iter().map(Vec::len).sum();
+    let edges: usize = polylines
+        .iter()
+        .filter(|p| p.len() >= 2)
+        .map(Vec::len)
+        .sum();
+    let header = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment closed polylines written by necklace\n\
+         element vertex {vertices}\nproperty double x\nproperty double y\nproperty double z\n\
+         property int loop\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+         element edge {edges}\nproperty int vertex1\nproperty int vertex2\nproperty int loop\n\
+         end_header\n"
+    );
+    out.extend_from_slice(header.as_bytes());
+    for (i, line) in polylines.iter().enumerate() {
+        for p in line {
+            for c in p {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+            out.extend_from_slice(&(i as i32).to_le_bytes());
+            out.extend_from_slice(&colors[i]);
+        }
+    }
+    let mut first = 0usize;
+    for (i, line) in polylines.iter().enumerate() {
+        let n = line.len();
+        if n >= 2 {
+            for k in 0..n {
+                out.extend_from_slice(&((first + k) as i32).to_le_bytes());
+                out.extend_from_slice(&((first + (k + 1) % n) as i32).to_le_bytes());
+                out.extend_from_slice(&(i as i32).to_le_bytes());
+            }
+        }
+        first += n;
+    }
+}

@@ -28,6 +28,7 @@ use serde::Serialize;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, cross, dot, norm, scale, sub};
 use crate::mesh::{SurfaceMesh, Topology};
+use crate::progress::{Progress, Silent};
 use cut::{closed_length, loop_around, plane_basis, plane_cut, Plane};
 use tighten::{tighten, SurfaceGeometry};
 pub use tighten::{SurfacePoint, TightenOptions, TightenStatus, Tightened};
@@ -229,6 +230,17 @@ pub fn find_loops(
     kind: LoopKind,
     options: &LoopOptions,
 ) -> Result<LoopResult> {
+    find_loops_with_progress(surface, seeds, kind, options, &Silent)
+}
+
+/// [`find_loops`], reporting each seed cut and tightened to `progress`.
+pub fn find_loops_with_progress(
+    surface: &SurfaceMesh,
+    seeds: &[Seed],
+    kind: LoopKind,
+    options: &LoopOptions,
+    progress: &dyn Progress,
+) -> Result<LoopResult> {
     check_inputs(surface, seeds, options)?;
 
     let start = Instant::now();
@@ -237,10 +249,16 @@ pub fn find_loops(
     let preparation = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
+    progress.start("tightening", seeds.len() as u64);
     let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
         .par_iter()
-        .map(|seed| loop_from_seed(surface, &topology, &geometry, seed, options))
+        .map(|seed| {
+            let outcome = loop_from_seed(surface, &topology, &geometry, seed, options);
+            progress.advance(1);
+            outcome
+        })
         .collect();
+    progress.finish();
     let cut_and_tighten = start.elapsed().as_secs_f64();
 
     let start = Instant::now();

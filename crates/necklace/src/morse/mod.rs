@@ -38,6 +38,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::geom::{add, dot, norm, scale, sub};
+use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 
 pub use critical::{
@@ -222,6 +223,16 @@ impl MorseResult {
 /// Smooth `field` on `mesh`, classify and track its critical points, and select the
 /// 2-saddles that mark necks (see the module doc).
 pub fn analyze(mesh: &TetMesh, field: &[f64], options: &MorseOptions) -> Result<MorseResult> {
+    analyze_with_progress(mesh, field, options, &Silent)
+}
+
+/// [`analyze`], reporting each heat step (with its classification) to `progress`.
+pub fn analyze_with_progress(
+    mesh: &TetMesh,
+    field: &[f64],
+    options: &MorseOptions,
+    progress: &dyn Progress,
+) -> Result<MorseResult> {
     check_inputs(mesh, field, options)?;
 
     // 1. Operators, the reduced heat system and the links (assembled once).
@@ -247,7 +258,9 @@ pub fn analyze(mesh: &TetMesh, field: &[f64], options: &MorseOptions) -> Result<
     let mut reports = Vec::with_capacity(options.steps);
     let mut steps = Vec::new();
     let mut tracker = Tracker::new();
+    progress.start("smoothing and critical points", options.steps as u64);
     for step in 1..=options.steps {
+        progress.advance(1);
         let start = Instant::now();
         let (next, report) = solver.step(&f);
         f = next;
@@ -268,6 +281,8 @@ pub fn analyze(mesh: &TetMesh, field: &[f64], options: &MorseOptions) -> Result<
         steps.push(summarize(step, &classification, morse_expected.sum, events));
         timings.selection += start.elapsed().as_secs_f64();
     }
+
+    progress.finish();
 
     // 4. Select the persistent 2-saddles with the right Hessian.
     let start = Instant::now();

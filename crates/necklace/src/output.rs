@@ -1,0 +1,371 @@
+//! The files a run writes, for the viewers people already have, and the picture of it.
+//! Like [`pipeline`](crate::pipeline), this module composes others (it reads the
+//! pipeline's [`NeckReport`] and draws with [`render`](crate::render)); no stage
+//! imports it.
+//!
+//! A run's folder ([`write_run`]):
+//! - `loops.obj`: each loop a closed `l` polyline, named `handle_3` / `tunnel_5` after its
+//!   kind and index (Blender, MeshLab, any OBJ reader);
+//! - `loops.ply`: the same loops as PLY vertices and edges, each carrying `loop` (its
+//!   index) and its kind's colour (MeshLab, ParaView, CloudCompare);
+//! - `loops.json`: the whole report with a `version` field (schema: `docs/output.md`);
+//! - `critical.ply`: every critical point at the last smoothing step of each side, with
+//!   `type`, `selected`, `persistence`, `side` and colours (see
+//!   [`pipeline::critical_point_cloud`](crate::pipeline::critical_point_cloud));
+//! - `view.png` with a picture, `field.vtu` (volume meshes of both sides with the
+//!   smoothed field and the side per vertex, for ParaView) with the volume kept.
+//!
+//! Units: the input mesh's; coordinates in its frame. Entry points: [`write_run`],
+//! [`report_json`], [`loop_scene`], [`read_loops_json`], [`read_points_json`].
+
+use std::path::{Path, PathBuf};
+
+use serde_json::{json, Value};
+
+use crate::error::{Error, ErrorKind, Result};
+use crate::io;
+use crate::loops::LoopKind;
+use crate::mesh::SurfaceMesh;
+use crate::pipeline::{NeckReport, Side};
+use crate::render::{self, Curve, Dot, RenderOptions, Scene};
+use crate::tet::TetMesh;
+
+/// The version of the JSON written by [`report_json`]; raised when a field changes
+/// meaning or disappears (new fields do not raise it).
+pub const JSON_VERSION: u64 = 1;
+
+/// Colour of handle loops in pictures and PLY files (vermilion).
+pub const HANDLE_COLOR: [u8; 3] = [213, 62, 30];
+/// Colour of tunnel loops (blue).
+pub const TUNNEL_COLOR: [u8; 3] = [30, 100, 200];
+/// Colour of saddle dots (gold).
+pub const SADDLE_COLOR: [u8; 3] = [245, 190, 20];
+
+/// The colour of a loop kind.
+pub fn kind_color(kind: LoopKind) -> [u8; 3] {
+    match kind {
+        LoopKind::Handle => HANDLE_COLOR,
+        LoopKind::Tunnel => TUNNEL_COLOR,
+    }
+}
+
+fn kind_name(kind: LoopKind) -> &'static str {
+    match kind {
+        LoopKind::Handle => "handle",
+        LoopKind::Tunnel => "tunnel",
+    }
+}
+
+/// What [`write_run`] writes besides the loops and critical points.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct OutputOptions {
+    /// Draw `view.png` with these options. Default none.
+    pub picture: Option<RenderOptions>,
+    /// Write `field.vtu` (needs a report made with `keep_volume`). Default false.
+    pub volume: bool,
+}
+
+/// The report as JSON: `version`, `input` (the file, when given), `units`, then every
+/// field of [`NeckReport`].
+pub fn report_json(report: &NeckReport, input: Option<&Path>) -> Result<Value> {
+    let fields = serde_json::to_value(report).map_err(|e| {
+        Error::new(
+            ErrorKind::Unsupported,
+            format!("cannot encode the report: {e}"),
+        )
+    })?;
+    let mut out = json!({
+        "version": JSON_VERSION,
+        "input": input.map(|p| p.display().to_string()),
+        "units": "input mesh units; coordinates in the input mesh's frame",
+    });
+    if let (Some(out), Value::Object(fields)) = (out.as_object_mut(), fields) {
+        out.extend(fields);
+    }
+    Ok(out)
+}
+
+/// A loop as drawn: its kind and points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopCurve {
+    /// Handle or tunnel.
+    pub kind: LoopKind,
+    /// The closed polyline (last point joins the first).
+    pub points: Vec<[f64; 3]>,
+}
+
+/// The loops of a report, in its order.
+pub fn loop_curves(report: &NeckReport) -> Vec<LoopCurve> {
+    report
+        .loops
+        .iter()
+        .map(|l| LoopCurve {
+            kind: l.kind,
+            points: l.points.clone(),
+        })
+        .collect()
+}
+
+/// The picture's scene: the surface, each loop in its kind's colour labelled by its
+/// index, `saddles` as dots, and a legend of the kinds present.
+pub fn loop_scene<'a>(
+    surface: &'a SurfaceMesh,
+    loops: &[LoopCurve],
+    saddles: &[[f64; 3]],
+) -> Scene<'a> {
+    let mut legend = Vec::new();
+    for kind in [LoopKind::Handle, LoopKind::Tunnel] {
+        if loops.iter().any(|l| l.kind == kind) {
+            legend.push((kind_name(kind).to_string(), kind_color(kind)));
+        }
+    }
+    Scene {
+        mesh: surface,
+        curves: loops
+            .iter()
+            .enumerate()
+            .map(|(i, l)| Curve {
+                points: l.points.clone(),
+                closed: true,
+                color: kind_color(l.kind),
+                label: Some(i.to_string()),
+            })
+            .collect(),
+        dots: saddles
+            .iter()
+            .map(|&position| Dot {
+                position,
+                color: SADDLE_COLOR,
+            })
+            .collect(),
+        legend,
+    }
+}
+
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text)
+        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+}
+
+/// Write a run's files into `dir` (created if missing); returns the paths written.
+pub fn write_run(
+    dir: &Path,
+    surface: &SurfaceMesh,
+    report: &NeckReport,
+    options: &OutputOptions,
+    input: Option<&Path>,
+) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Error::new(ErrorKind::Io, format!("cannot create the folder: {e}")).in_file(dir)
+    })?;
+    let mut written = Vec::new();
+    let curves = loop_curves(report);
+
+    let path = dir.join("loops.obj");
+    let lines: Vec<Vec<[f64; 3]>> = curves.iter().map(|c| c.points.clone()).collect();
+    let names: Vec<String> = curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| format!("{}_{i}", kind_name(c.kind)))
+        .collect();
+    io::write_polylines(&path, &lines, &names)?;
+    written.push(path);
+
+    let path = dir.join("loops.ply");
+    let colors: Vec<[u8; 3]> = curves.iter().map(|c| kind_color(c.kind)).collect();
+    io::write_polylines_ply(&path, &lines, &colors)?;
+    written.push(path);
+
+    let path = dir.join("loops.json");
+    let value = report_json(report, input)?;
+    let text = serde_json::to_string_pretty(&value).map_err(|e| {
+        Error::new(
+            ErrorKind::Unsupported,
+            format!("cannot encode the report: {e}"),
+        )
+    })?;
+    write_text(&path, &(text + "\n"))?;
+    written.push(path);
+
+    let path = dir.join("critical.ply");
+    io::write_point_cloud(&path, &critical_cloud(report))?;
+    written.push(path);
+
+    if let Some(picture) = &options.picture {
+        let path = dir.join("view.png");
+        let saddles: Vec<[f64; 3]> = report.loops.iter().map(|l| l.saddle).collect();
+        let rendered = render::render(&loop_scene(surface, &curves, &saddles), picture)?;
+        rendered.image.write_png(&path)?;
+        written.push(path);
+    }
+
+    if options.volume {
+        let path = dir.join("field.vtu");
+        let (mesh, values, side) = merged_field(report)?;
+        io::write_tet_mesh(&path, &mesh, &[("field", &values), ("side", &side)])?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+fn side_code(side: Side) -> f64 {
+    match side {
+        Side::Inside => 0.0,
+        Side::Outside => 1.0,
+    }
+}
+
+/// The critical points of every side in one cloud, with a `side` field (0 inside,
+/// 1 outside).
+fn critical_cloud(report: &NeckReport) -> io::PointCloud {
+    let mut cloud = io::PointCloud::default();
+    let mut colors = Vec::new();
+    let mut sides = Vec::new();
+    for s in &report.sides {
+        let c = &s.critical;
+        cloud.positions.extend_from_slice(&c.positions);
+        for (name, values) in &c.scalars {
+            match cloud.scalars.iter_mut().find(|(n, _)| n == name) {
+                Some((_, all)) => all.extend_from_slice(values),
+                None => cloud.scalars.push((name.clone(), values.clone())),
+            }
+        }
+        colors.extend(
+            c.colors
+                .clone()
+                .unwrap_or_else(|| vec![[0, 0, 0]; c.positions.len()]),
+        );
+        sides.extend(std::iter::repeat_n(side_code(s.side), c.positions.len()));
+    }
+    let n = cloud.positions.len();
+    // A field missing on one side would be short: pad, so every field has n values.
+    for (_, values) in &mut cloud.scalars {
+        values.resize(n, 0.0);
+    }
+    cloud.scalars.push(("side".into(), sides));
+    cloud.colors = Some(colors);
+    cloud
+}
+
+/// Both sides' volume meshes as one mesh, with the smoothed field and the side.
+fn merged_field(report: &NeckReport) -> Result<(TetMesh, Vec<f64>, Vec<f64>)> {
+    let mut positions = Vec::new();
+    let mut tets = Vec::new();
+    let mut kinds = Vec::new();
+    let mut values = Vec::new();
+    let mut side = Vec::new();
+    for s in &report.sides {
+        let Some(field) = &s.field else {
+            return Err(Error::invalid_argument(
+                "the volume was not kept: run with keep_volume (--volume) to write field.vtu",
+            ));
+        };
+        let offset = positions.len() as u32;
+        positions.extend_from_slice(&field.mesh.positions);
+        kinds.extend_from_slice(&field.mesh.kinds);
+        tets.extend(field.mesh.tets.iter().map(|t| t.map(|v| v + offset)));
+        values.extend_from_slice(&field.values);
+        side.extend(std::iter::repeat_n(
+            side_code(s.side),
+            field.mesh.positions.len(),
+        ));
+    }
+    Ok((TetMesh::new(positions, tets, kinds)?, values, side))
+}
+
+fn read_json(path: &Path) -> Result<Value> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot read: {e}")).in_file(path))?;
+    let value: Value = serde_json::from_str(&text).map_err(|e| {
+        Error::new(ErrorKind::Syntax, format!("not JSON: {e}"))
+            .at_line(e.line())
+            .in_file(path)
+    })?;
+    if let Some(v) = value.get("version").and_then(Value::as_u64) {
+        if v > JSON_VERSION {
+            return Err(Error::new(
+                ErrorKind::Unsupported,
+                format!("JSON version {v} is newer than this necklace reads ({JSON_VERSION})"),
+            )
+            .in_file(path));
+        }
+    }
+    Ok(value)
+}
+
+fn point(value: &Value) -> Option<[f64; 3]> {
+    let a = value.as_array()?;
+    if a.len() != 3 {
+        return None;
+    }
+    let p = [a[0].as_f64()?, a[1].as_f64()?, a[2].as_f64()?];
+    p.iter().all(|v| v.is_finite()).then_some(p)
+}
+
+/// The loops of a `loops.json` file (see `docs/output.md`).
+pub fn read_loops_json(path: impl AsRef<Path>) -> Result<Vec<LoopCurve>> {
+    let path = path.as_ref();
+    let value = read_json(path)?;
+    let bad = |m: String| Error::new(ErrorKind::Syntax, m).in_file(path);
+    let loops = value
+        .get("loops")
+        .and_then(Value::as_array)
+        .ok_or_else(|| bad("no \"loops\" array: not a necklace loops.json".into()))?;
+    loops
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let kind = match l.get("kind").and_then(Value::as_str) {
+                Some("handle") => LoopKind::Handle,
+                Some("tunnel") => LoopKind::Tunnel,
+                _ => {
+                    return Err(bad(format!(
+                        "loop {i}: \"kind\" is not \"handle\" or \"tunnel\""
+                    )))
+                }
+            };
+            let points = l
+                .get("points")
+                .and_then(Value::as_array)
+                .and_then(|ps| ps.iter().map(point).collect::<Option<Vec<_>>>())
+                .ok_or_else(|| bad(format!("loop {i}: \"points\" is not a list of [x, y, z]")))?;
+            Ok(LoopCurve { kind, points })
+        })
+        .collect()
+}
+
+/// Saddle positions from the JSON of `necklace critical --json` (its `saddles`) or of a
+/// `loops.json` (the `saddles` of each of its `sides`).
+pub fn read_points_json(path: impl AsRef<Path>) -> Result<Vec<[f64; 3]>> {
+    let path = path.as_ref();
+    let value = read_json(path)?;
+    let mut lists: Vec<&Value> = Vec::new();
+    if let Some(s) = value.get("saddles") {
+        lists.push(s);
+    }
+    if let Some(sides) = value.get("sides").and_then(Value::as_array) {
+        lists.extend(sides.iter().filter_map(|s| s.get("saddles")));
+    }
+    if lists.is_empty() {
+        return Err(Error::new(
+            ErrorKind::Syntax,
+            "no \"saddles\": expected the JSON of `necklace critical --json` or a loops.json",
+        )
+        .in_file(path));
+    }
+    let mut points = Vec::new();
+    for list in lists {
+        let items = list.as_array().map(Vec::as_slice).unwrap_or_default();
+        for (i, s) in items.iter().enumerate() {
+            let p = s.get("position").and_then(point).ok_or_else(|| {
+                Error::new(
+                    ErrorKind::Syntax,
+                    format!("saddle {i}: no \"position\" [x, y, z]"),
+                )
+                .in_file(path)
+            })?;
+            points.push(p);
+        }
+    }
+    Ok(points)
+}
