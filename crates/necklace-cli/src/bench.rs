@@ -72,7 +72,7 @@ impl Row {
     }
 
     fn markdown(&self) -> String {
-        format!("| {} |", self.cells(2).join(" | "))
+        format!("| {} |", self.cells(3).join(" | "))
     }
 
     fn csv(&self) -> String {

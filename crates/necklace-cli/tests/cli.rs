@@ -254,14 +254,30 @@ fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
         "--json",
         "-o",
         out_dir.to_str().unwrap(),
+        "--png",
     ]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // stderr is not a terminal here: no progress bars, and nothing else to say.
+    assert_eq!(String::from_utf8_lossy(&out.stderr), "");
+    for file in [
+        "loops.obj",
+        "loops.ply",
+        "loops.json",
+        "critical.ply",
+        "view.png",
+    ] {
+        assert!(out_dir.join(file).is_file(), "{file}");
+    }
+    assert!(!out_dir.join("field.vtu").exists(), "only with --volume");
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    for field in ["loops", "dropped", "morse", "timings"] {
+    assert_eq!(json["version"], 1);
+    for field in [
+        "loops", "dropped", "morse", "timings", "sides", "units", "input", "flipped",
+    ] {
         assert!(!json[field].is_null(), "{field}");
     }
     let loops = json["loops"].as_array().unwrap();
@@ -275,7 +291,11 @@ fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
         "normal",
         "radius",
         "saddle",
+        "seed",
         "persistence",
+        "duplicates",
+        "surface_points",
+        "tightening",
         "reason",
     ] {
         assert!(!loops[0][field].is_null(), "{field}");
@@ -309,4 +329,187 @@ fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
         String::from_utf8_lossy(&out.stderr).trim().lines().count(),
         1
     );
+}
+
+#[test]
+fn render_draws_a_mesh_with_its_loops_and_rejects_bad_input() {
+    let dir = temp_dir("render");
+    let mesh = dir.join("torus.obj");
+    let out_dir = dir.join("out");
+    assert!(necklace(&[
+        "shape",
+        "varying-torus",
+        "--param",
+        "res=40",
+        "-o",
+        mesh.to_str().unwrap()
+    ])
+    .status
+    .success());
+    let out = necklace(&[
+        "loops",
+        mesh.to_str().unwrap(),
+        "-o",
+        out_dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json = out_dir.join("loops.json");
+    let png = dir.join("view.png");
+    let out = necklace(&[
+        "render",
+        mesh.to_str().unwrap(),
+        "--loops",
+        json.to_str().unwrap(),
+        "--critical",
+        json.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--size",
+        "400",
+        "--views",
+        "2",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    // IHDR: width and height, big-endian, at bytes 16..24.
+    let width = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+    let height = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+    assert_eq!((width, height), (400, 200));
+
+    for args in [
+        vec![
+            "render",
+            mesh.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--views",
+            "7",
+        ],
+        vec![
+            "render",
+            mesh.to_str().unwrap(),
+            "--loops",
+            mesh.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        vec![
+            "render",
+            dir.join("missing.obj").to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ],
+    ] {
+        let out = necklace(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
+
+#[test]
+fn demo_runs_the_built_in_shapes_and_writes_pictures() {
+    let dir = temp_dir("demo");
+    let out = necklace(&["demo", "-o", dir.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for shape in ["chain", "varying-torus", "pretzel"] {
+        assert!(text.contains(&format!("{shape}: genus")), "{text}");
+        for file in [
+            "surface.obj",
+            "loops.obj",
+            "loops.ply",
+            "loops.json",
+            "critical.ply",
+            "view.png",
+        ] {
+            assert!(dir.join(shape).join(file).is_file(), "{shape}/{file}");
+        }
+    }
+    // The chain's two necks and the varying torus's handle and tunnel are found.
+    assert!(
+        text.contains("2 handles (expected 2), 0 tunnels (expected 0)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("1 handles (expected 1), 1 tunnels (expected 1)"),
+        "{text}"
+    );
+}
+
+#[test]
+fn bench_prints_a_row_per_model_and_mode_and_writes_the_csv_and_h_series() {
+    let dir = temp_dir("bench");
+    let models = dir.join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    let sphere = models.join("ball.obj");
+    assert!(necklace(&[
+        "shape",
+        "sphere",
+        "--param",
+        "res=20",
+        "-o",
+        sphere.to_str().unwrap()
+    ])
+    .status
+    .success());
+    std::fs::write(models.join("notes.txt"), "not a mesh").unwrap();
+    let csv = dir.join("bench.csv");
+    let out = necklace(&[
+        "bench",
+        models.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("| ball | handles |") && text.contains("| ball | tunnels |"),
+        "{text}"
+    );
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = table.lines().next().unwrap().split(',').collect();
+    for column in [
+        "preprocessing_s",
+        "smoothing_s",
+        "critical_points_s",
+        "loop_computation_s",
+        "total_s",
+        "tets",
+        "loops",
+    ] {
+        assert!(header.contains(&column), "{column}");
+    }
+    assert_eq!(table.lines().count(), 3, "{table}");
+    let series = std::fs::read_to_string(dir.join("bench-scaling.csv")).unwrap();
+    assert_eq!(series.lines().count(), 6, "{series}");
+    // Finer h, more tets.
+    let tets: Vec<u64> = series
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+        .collect();
+    assert!(tets.windows(2).all(|w| w[0] < w[1]), "{tets:?}");
+    assert!(dir.join("bench-scaling.png").is_file());
+
+    let out = necklace(&["bench", dir.join("nowhere").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
 }

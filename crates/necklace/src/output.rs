@@ -1,6 +1,6 @@
 //! The files a run writes, for the viewers people already have, and the picture of it.
 //! Like [`pipeline`](crate::pipeline), this module composes others (it reads the
-//! pipeline's [`NeckReport`] and draws with [`render`](crate::render)); no stage
+//! pipeline's [`NeckReport`] and draws with [`render`]); no stage
 //! imports it.
 //!
 //! A run's folder ([`write_run`]):

@@ -6,7 +6,7 @@
 //!    closed curve around the saddle (the smallest in-plane polygon containing it).
 //!    Optionally ("lower link variation") try a few normals tilted around the given one
 //!    and keep the shortest such curve.
-//! 2. [`tighten`]: shorten it into a closed geodesic, not tied to mesh edges. A loop that
+//! 2. [`tighten`](mod@tighten): shorten it into a closed geodesic, not tied to mesh edges. A loop that
 //!    collapses (slides off a cap) or does not settle is dropped with its reason.
 //! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; merge
 //!    duplicates (centres within `merge_distance` × diagonal and lengths within

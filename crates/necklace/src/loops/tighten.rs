@@ -1,5 +1,5 @@
 //! Geodesic tightening of a closed loop on a triangle mesh (sec. 4.3; the paper's
-//! ref. [25], Xin & Wang 2007, "Efficiently determining a locally exact shortest path on
+//! ref. \[25\], Xin & Wang 2007, "Efficiently determining a locally exact shortest path on
 //! polyhedral surfaces").
 //!
 //! The loop is held as a *strip*: the cyclic sequence of edges it crosses (portals) and

@@ -100,7 +100,7 @@ pub fn chart(chart: &Chart, width: u32, height: u32) -> Result<Image> {
     let (top, bottom) = (0.14 * h as f64, 0.86 * h as f64);
     let sx = |x: f64| left + (right - left) * x / x_top;
     let sy = |y: f64| bottom - (bottom - top) * y / y_top;
-    let line = 0.6 * ss as f64;
+    let line = ss as f64;
 
     // Grid and tick labels.
     let mut v = 0.0;
