@@ -422,7 +422,14 @@ fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
     for file in files {
         let mesh = necklace::io::read_mesh(&file).unwrap();
         let (mesh, _, _) = necklace::pipeline::orient_for_volume(mesh);
-        let r = find_necks(&mesh, &NeckOptions::default()).unwrap();
+        // The wire sphere's shell (8.7M tets, a minute here) gives no tunnel loop: none of
+        // its 72 tunnel saddles has a planar cut around it. volume_pipeline meshes that
+        // shell and checks its Morse sum; here only its 2k handle saddles run.
+        let options = NeckOptions {
+            tunnels: !file.ends_with("wiresphere.obj"),
+            ..NeckOptions::default()
+        };
+        let r = find_necks(&mesh, &options).unwrap();
         let topology = Topology::new(&mesh);
         for l in &r.loops {
             check_loop(&mesh, &topology, l);
