@@ -124,7 +124,7 @@ pub fn run(
     print_now(&format!(
         "necklace bench: {} models, {} threads, default settings (h = diagonal / 64, 20 steps)",
         files.len(),
-        rayon_threads()
+        available_threads()
     ));
     print_now(HEADER);
     let mut csv_text = format!("{CSV_HEADER}\n");
@@ -164,7 +164,7 @@ pub fn run(
     Ok(out)
 }
 
-fn rayon_threads() -> usize {
+fn available_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 

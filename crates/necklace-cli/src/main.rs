@@ -81,15 +81,8 @@ enum Command {
         /// Work in the outside shell (tunnels) instead of the inside (handles).
         #[arg(long)]
         exterior: bool,
-        /// Last smoothing step N (classification runs from step 10 to N).
-        #[arg(long, default_value_t = 20)]
-        steps: usize,
-        /// Heat time step in units where the bounding box's longest side is 1.
-        #[arg(long, default_value_t = 0.01)]
-        tau: f64,
-        /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
-        #[arg(long)]
-        h: Option<f64>,
+        #[command(flatten)]
+        method: MethodArgs,
         /// Write the critical points at step N (with type, selected, persistence and
         /// colours) as a PLY point cloud.
         #[arg(short, long)]
@@ -110,15 +103,8 @@ enum Command {
         /// Find tunnel loops (outside).
         #[arg(long)]
         tunnels: bool,
-        /// Last smoothing step N (classification runs from step 10 to N).
-        #[arg(long, default_value_t = 20)]
-        steps: usize,
-        /// Heat time step in units where the bounding box's longest side is 1.
-        #[arg(long, default_value_t = 0.01)]
-        tau: f64,
-        /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
-        #[arg(long)]
-        h: Option<f64>,
+        #[command(flatten)]
+        method: MethodArgs,
         /// Write loops.obj, loops.ply, loops.json and critical.ply into this folder.
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -195,6 +181,37 @@ enum Command {
     },
 }
 
+/// The method's settings shared by `critical` and `loops`.
+#[derive(clap::Args)]
+struct MethodArgs {
+    /// Last smoothing step N (classification runs from step 10 to N).
+    #[arg(long, default_value_t = 20)]
+    steps: usize,
+    /// Heat time step in units where the bounding box's longest side is 1.
+    #[arg(long, default_value_t = 0.01)]
+    tau: f64,
+    /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
+    #[arg(long)]
+    h: Option<f64>,
+}
+
+impl MethodArgs {
+    fn volume(&self) -> VolumeOptions {
+        VolumeOptions {
+            h: self.h,
+            ..VolumeOptions::default()
+        }
+    }
+
+    fn morse(&self) -> MorseOptions {
+        MorseOptions {
+            steps: self.steps,
+            tau: self.tau,
+            ..MorseOptions::default()
+        }
+    }
+}
+
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum MesherArg {
     Stuffing,
@@ -269,30 +286,22 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
         Command::Critical {
             mesh,
             exterior,
-            steps,
-            tau,
-            h,
+            method,
             output,
             json,
-        } => {
-            let volume = VolumeOptions {
-                h,
-                ..VolumeOptions::default()
-            };
-            let morse = MorseOptions {
-                steps,
-                tau,
-                ..MorseOptions::default()
-            };
-            critical(mesh, exterior, &volume, &morse, output, json)
-        }
+        } => critical(
+            mesh,
+            exterior,
+            &method.volume(),
+            &method.morse(),
+            output,
+            json,
+        ),
         Command::Loops {
             mesh,
             handles,
             tunnels,
-            steps,
-            tau,
-            h,
+            method,
             output,
             png,
             volume,
@@ -302,15 +311,8 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
                 // Neither flag: both kinds.
                 handles: handles || !tunnels,
                 tunnels: tunnels || !handles,
-                volume: VolumeOptions {
-                    h,
-                    ..VolumeOptions::default()
-                },
-                morse: MorseOptions {
-                    steps,
-                    tau,
-                    ..MorseOptions::default()
-                },
+                volume: method.volume(),
+                morse: method.morse(),
                 keep_volume: volume,
                 ..pipeline::NeckOptions::default()
             };

@@ -855,9 +855,17 @@ pub fn find_necks_with_progress(
             "the surface has no triangles",
         ));
     }
-    // Inward-facing input is turned round rather than meshed inside out.
-    let (flipped_copy, surface_report, flipped) = orient_for_volume(surface.clone());
-    let surface = if flipped { &flipped_copy } else { surface };
+    // Inward-facing input is turned round rather than meshed inside out (a copy only
+    // then).
+    let surface_report = MeshReport::new(surface);
+    let flipped = surface_report.signed_volume < 0.0;
+    let turned;
+    let surface = if flipped {
+        turned = orient_for_volume(surface.clone()).0;
+        &turned
+    } else {
+        surface
+    };
     let mut report = NeckReport {
         loops: Vec::new(),
         dropped: Vec::new(),

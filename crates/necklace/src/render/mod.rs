@@ -407,19 +407,35 @@ fn rgb(c: [u8; 3]) -> Rgb {
     c.map(|v| f32::from(v) / 255.0)
 }
 
-/// Lambert with a key and a fill light fixed to the camera, ambient and a little
-/// specular; two-sided (a normal facing away is turned round).
-fn shade(n: [f64; 3], base: Rgb) -> Rgb {
-    let mut n = normalize(n);
-    if n[2] < 0.0 {
-        n = n.map(|v| -v);
+/// A key and a fill light fixed to the camera (camera coordinates, unit vectors), and
+/// the key's half vector toward the viewer.
+struct Lights {
+    key: [f64; 3],
+    fill: [f64; 3],
+    half: [f64; 3],
+}
+
+impl Lights {
+    fn new() -> Lights {
+        let key = normalize([-0.45, 0.55, 0.7]);
+        Lights {
+            key,
+            fill: normalize([0.6, -0.25, 0.75]),
+            half: normalize([key[0], key[1], key[2] + 1.0]),
+        }
     }
-    let key = normalize([-0.45, 0.55, 0.7]);
-    let fill = normalize([0.6, -0.25, 0.75]);
-    let half = normalize([key[0], key[1], key[2] + 1.0]);
-    let diffuse = 0.24 + 0.62 * dot3(n, key).max(0.0) + 0.2 * dot3(n, fill).max(0.0);
-    let specular = 0.16 * dot3(n, half).max(0.0).powi(40);
-    base.map(|c| (c * diffuse as f32 + specular as f32).min(1.0))
+
+    /// Lambert from both lights, ambient and a little specular; two-sided (a normal
+    /// facing away is turned round).
+    fn shade(&self, n: [f64; 3], base: Rgb) -> Rgb {
+        let mut n = normalize(n);
+        if n[2] < 0.0 {
+            n = n.map(|v| -v);
+        }
+        let diffuse = 0.24 + 0.62 * dot3(n, self.key).max(0.0) + 0.2 * dot3(n, self.fill).max(0.0);
+        let specular = 0.16 * dot3(n, self.half).max(0.0).powi(40);
+        base.map(|c| (c * diffuse as f32 + specular as f32).min(1.0))
+    }
 }
 
 /// The bounding box of everything drawn.
@@ -520,12 +536,13 @@ fn draw_view(
         .map(|&n| projection.camera_direction(n))
         .collect();
     let base = rgb(options.surface_color);
+    let lights = Lights::new();
     for t in &scene.mesh.triangles {
         let [a, b, c] = t.map(|v| v as usize);
         canvas.triangle(
             [screen[a], screen[b], screen[c]],
             [camera_normals[a], camera_normals[b], camera_normals[c]],
-            |n| shade(n, base),
+            |n| lights.shade(n, base),
         );
     }
     let reach = options.supersample as usize;
