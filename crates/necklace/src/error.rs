@@ -33,6 +33,9 @@ pub enum ErrorKind {
     InvalidArgument,
     /// The mesh was read but is not what the method needs (e.g. open or non-manifold).
     InvalidMesh,
+    /// The work would exceed a size budget (e.g. the volume mesh's tet count); the
+    /// message names the figure and the option that lifts the budget.
+    OverBudget,
 }
 
 /// Where in the input an error was found.

@@ -50,3 +50,93 @@ pub fn lerp(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
         a[2] + t * (b[2] - a[2]),
     ]
 }
+
+/// Closest point to `p` on the triangle `abc`, by its Voronoi regions (Ericson,
+/// *Real-Time Collision Detection*, 5.1.5). An interior closest point is the projection
+/// onto the plane; a zero-area triangle, or rounding that contradicts the regions, falls
+/// back to the closest point on the three edges, so the result is always on the triangle.
+#[inline]
+pub fn closest_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+    let ab = sub(b, a);
+    let ac = sub(c, a);
+    let ap = sub(p, a);
+    let d1 = dot(ab, ap);
+    let d2 = dot(ac, ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = sub(p, b);
+    let d3 = dot(ab, bp);
+    let d4 = dot(ac, bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let den = d1 - d3;
+        if den > 0.0 {
+            return add(a, scale(ab, d1 / den));
+        }
+        return closest_on_edges(p, a, b, c);
+    }
+    let cp = sub(p, c);
+    let d5 = dot(ab, cp);
+    let d6 = dot(ac, cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let den = d2 - d6;
+        if den > 0.0 {
+            return add(a, scale(ac, d2 / den));
+        }
+        return closest_on_edges(p, a, b, c);
+    }
+    let va = d3 * d6 - d5 * d4;
+    let e1 = d4 - d3;
+    let e2 = d5 - d6;
+    if va <= 0.0 && e1 >= 0.0 && e2 >= 0.0 {
+        let den = e1 + e2;
+        if den > 0.0 {
+            return add(b, scale(sub(c, b), e1 / den));
+        }
+        return closest_on_edges(p, a, b, c);
+    }
+    if va > 0.0 && vb > 0.0 && vc > 0.0 {
+        let n = cross(ab, ac);
+        let nn = dot(n, n);
+        if nn > 0.0 && nn.is_finite() {
+            return sub(p, scale(n, dot(n, ap) / nn));
+        }
+    }
+    closest_on_edges(p, a, b, c)
+}
+
+/// Closest point to `p` on the boundary of triangle `abc` (all of a degenerate one).
+fn closest_on_edges(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+    let mut best = a;
+    let mut best_d2 = f64::INFINITY;
+    for (u, v) in [(a, b), (b, c), (c, a)] {
+        let q = closest_on_segment(p, u, v);
+        let d = sub(p, q);
+        let d2 = dot(d, d);
+        if d2 < best_d2 {
+            best_d2 = d2;
+            best = q;
+        }
+    }
+    best
+}
+
+/// Closest point to `p` on the segment `uv` (`u` for a zero-length one).
+#[inline]
+pub fn closest_on_segment(p: [f64; 3], u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    let e = sub(v, u);
+    let ee = dot(e, e);
+    if ee.is_nan() || ee <= 0.0 {
+        return u;
+    }
+    let t = (dot(sub(p, u), e) / ee).clamp(0.0, 1.0);
+    add(u, scale(e, t))
+}

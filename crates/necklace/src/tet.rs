@@ -177,43 +177,149 @@ impl TetMesh {
         (0..self.num_vertices())
             .into_par_iter()
             .filter(|&v| keep[v] && !self.vertex_tets(v).is_empty())
-            .map_init(
-                || (Vec::new(), Vec::new()),
-                |(edges, faces): &mut (Vec<u32>, Vec<[u32; 2]>), v| {
-                    let v32 = v as u32;
-                    let kept_above = |u: u32| u > v32 && keep[u as usize];
-                    edges.clear();
-                    faces.clear();
-                    let mut tets = 0i64;
-                    for &t in self.vertex_tets(v) {
-                        let mut others = [0u32; 3];
-                        let mut k = 0;
-                        for &u in &self.tets[t as usize] {
-                            if u != v32 && k < 3 {
-                                others[k] = u;
-                                k += 1;
-                            }
-                        }
-                        others.sort_unstable();
-                        let above = others.map(kept_above);
-                        edges.extend(others.iter().zip(above).filter(|x| x.1).map(|x| *x.0));
-                        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
-                            if above[a] && above[b] {
-                                faces.push([others[a], others[b]]);
-                            }
-                        }
-                        if above.iter().all(|&x| x) {
-                            tets += 1;
-                        }
-                    }
-                    edges.sort_unstable();
-                    edges.dedup();
-                    faces.sort_unstable();
-                    faces.dedup();
-                    1 - edges.len() as i64 + faces.len() as i64 - tets
-                },
-            )
+            .map_init(EulerScratch::default, |scratch, v| {
+                self.euler_at(v, keep, scratch)
+            })
             .sum()
+    }
+
+    /// The simplices of the kept subcomplex whose lowest vertex is `v` (kept and used),
+    /// counted with their signs: 1 − edges + faces − tets.
+    fn euler_at(&self, v: usize, keep: &[bool], scratch: &mut EulerScratch) -> i64 {
+        let v32 = v as u32;
+        let kept_above = |u: u32| u > v32 && keep[u as usize];
+        let (edges, faces) = (&mut scratch.edges, &mut scratch.faces);
+        edges.clear();
+        faces.clear();
+        let mut tets = 0i64;
+        for &t in self.vertex_tets(v) {
+            let mut others = [0u32; 3];
+            let mut k = 0;
+            for &u in &self.tets[t as usize] {
+                if u != v32 && k < 3 {
+                    others[k] = u;
+                    k += 1;
+                }
+            }
+            others.sort_unstable();
+            let above = others.map(kept_above);
+            edges.extend(others.iter().zip(above).filter(|x| x.1).map(|x| *x.0));
+            for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+                if above[a] && above[b] {
+                    faces.push([others[a], others[b]]);
+                }
+            }
+            if above.iter().all(|&x| x) {
+                tets += 1;
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        faces.sort_unstable();
+        // A face used by one tet is on the boundary (two tets share every other face).
+        scratch.boundary.clear();
+        let mut i = 0;
+        while i < faces.len() {
+            let mut j = i + 1;
+            while j < faces.len() && faces[j] == faces[i] {
+                j += 1;
+            }
+            if j - i == 1 {
+                scratch.boundary.push([v32, faces[i][0], faces[i][1]]);
+            }
+            i = j;
+        }
+        faces.dedup();
+        1 - edges.len() as i64 + faces.len() as i64 - tets
+    }
+
+    /// The topology of the mesh: per connected component its χ and the χ of each of its
+    /// boundary surfaces (see [`TetTopology`]).
+    pub fn topology(&self) -> TetTopology {
+        let (tet_component, count) = self.tet_components();
+        let mut vertex_component = vec![u32::MAX; self.num_vertices()];
+        for (t, tet) in self.tets.iter().enumerate() {
+            for &v in tet {
+                vertex_component[v as usize] = tet_component[t];
+            }
+        }
+        let all = vec![true; self.num_vertices()];
+        // Per vertex: its share of χ and the boundary faces whose lowest vertex it is.
+        let per_vertex: Vec<(u32, i64, Vec<[u32; 3]>)> = (0..self.num_vertices())
+            .into_par_iter()
+            .filter(|&v| !self.vertex_tets(v).is_empty())
+            .map_init(EulerScratch::default, |scratch, v| {
+                let euler = self.euler_at(v, &all, scratch);
+                (vertex_component[v], euler, scratch.boundary.clone())
+            })
+            .collect();
+        let mut components = vec![
+            ComponentTopology {
+                euler: 0,
+                boundary_eulers: Vec::new(),
+            };
+            count
+        ];
+        let mut faces: Vec<[u32; 3]> = Vec::new();
+        for (c, e, boundary) in per_vertex {
+            components[c as usize].euler += e;
+            faces.extend(boundary);
+        }
+        // Boundary surfaces: boundary faces joined across shared edges.
+        let mut parent: Vec<usize> = (0..faces.len()).collect();
+        let mut edge_faces: Vec<([u32; 2], usize)> = Vec::with_capacity(3 * faces.len());
+        for (f, face) in faces.iter().enumerate() {
+            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                let (u, w) = (face[a], face[b]);
+                edge_faces.push(([u.min(w), u.max(w)], f));
+            }
+        }
+        edge_faces.sort_unstable();
+        for pair in edge_faces.windows(2) {
+            if pair[0].0 == pair[1].0 {
+                union(&mut parent, pair[0].1, pair[1].1);
+            }
+        }
+        // Per boundary surface (by its root face): its tet component, vertices, edges
+        // and face count.
+        #[derive(Default)]
+        struct Surface {
+            component: u32,
+            vertices: Vec<u32>,
+            edges: usize,
+            faces: i64,
+        }
+        let mut surfaces: HashMap<usize, Surface> = HashMap::new();
+        for (f, face) in faces.iter().enumerate() {
+            let entry = surfaces
+                .entry(find(&mut parent, f))
+                .or_insert_with(|| Surface {
+                    component: vertex_component[face[0] as usize],
+                    ..Surface::default()
+                });
+            entry.vertices.extend_from_slice(face);
+            entry.faces += 1;
+        }
+        // Each boundary edge once (its faces are in the same surface).
+        let mut edge_root: Vec<([u32; 2], usize)> = edge_faces
+            .iter()
+            .map(|&(e, f)| (e, find(&mut parent, f)))
+            .collect();
+        edge_root.dedup_by_key(|x| x.0);
+        for (_, root) in edge_root {
+            if let Some(entry) = surfaces.get_mut(&root) {
+                entry.edges += 1;
+            }
+        }
+        for mut surface in surfaces.into_values() {
+            surface.vertices.sort_unstable();
+            surface.vertices.dedup();
+            let euler = surface.vertices.len() as i64 - surface.edges as i64 + surface.faces;
+            components[surface.component as usize]
+                .boundary_eulers
+                .push(euler);
+        }
+        TetTopology::new(components)
     }
 
     /// Connected components of the tets (through shared vertices): a component id per
@@ -336,6 +442,103 @@ impl TetMesh {
             };
         }
         kinds
+    }
+}
+
+/// Reusable buffers of [`TetMesh::euler_at`].
+#[derive(Default)]
+struct EulerScratch {
+    edges: Vec<u32>,
+    faces: Vec<[u32; 2]>,
+    /// The boundary faces found at the vertex (lowest vertex first).
+    boundary: Vec<[u32; 3]>,
+}
+
+/// The topology of a tet mesh (or the one a surface predicts for it): its connected
+/// components, each with its Euler characteristic and those of its boundary surfaces.
+/// Components are sorted (by χ, then by their boundary list), so two topologies
+/// compare equal exactly when they agree component by component.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct TetTopology {
+    /// One entry per connected component.
+    pub components: Vec<ComponentTopology>,
+}
+
+/// One connected component of a [`TetTopology`].
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+pub struct ComponentTopology {
+    /// χ = V − E + F − T of the component (for a 3-manifold, half the sum of its
+    /// boundary surfaces' χ).
+    pub euler: i64,
+    /// χ = 2 − 2g of each boundary surface, largest first.
+    pub boundary_eulers: Vec<i64>,
+}
+
+impl TetTopology {
+    /// Sort the components (and each one's boundary list) into the canonical order.
+    pub fn new(mut components: Vec<ComponentTopology>) -> TetTopology {
+        for c in &mut components {
+            c.boundary_eulers.sort_unstable_by(|a, b| b.cmp(a));
+        }
+        components.sort_unstable();
+        TetTopology { components }
+    }
+
+    /// χ of the whole mesh.
+    pub fn euler(&self) -> i64 {
+        self.components.iter().map(|c| c.euler).sum()
+    }
+
+    /// Number of boundary surfaces.
+    pub fn boundary_components(&self) -> usize {
+        self.components
+            .iter()
+            .map(|c| c.boundary_eulers.len())
+            .sum()
+    }
+
+    /// χ of the whole boundary.
+    pub fn boundary_euler(&self) -> i64 {
+        self.components
+            .iter()
+            .flat_map(|c| &c.boundary_eulers)
+            .sum()
+    }
+}
+
+impl std::fmt::Display for TetTopology {
+    /// `3 components (χ 1 | 1 boundary: 2), ...`: counts and χ per component.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} component{}, χ {}, {} boundary surface{}",
+            self.components.len(),
+            if self.components.len() == 1 { "" } else { "s" },
+            self.euler(),
+            self.boundary_components(),
+            if self.boundary_components() == 1 {
+                ""
+            } else {
+                "s"
+            },
+        )?;
+        // Genus of each boundary surface, when the list is short enough to read.
+        if self.boundary_components() <= 8 {
+            let genera: Vec<String> = self
+                .components
+                .iter()
+                .flat_map(|c| &c.boundary_eulers)
+                .map(|&e| {
+                    if e % 2 == 0 {
+                        format!("{}", (2 - e) / 2)
+                    } else {
+                        format!("χ{e}")
+                    }
+                })
+                .collect();
+            write!(f, " of genus {}", genera.join(", "))?;
+        }
+        Ok(())
     }
 }
 

@@ -8,7 +8,7 @@
 //! fixed-size traversal stacks below. Triangles are stored reordered so that every node,
 //! leaf or not, owns a contiguous range of them.
 
-use crate::geom::{add, cross, dot, scale, sub};
+use crate::geom::{add, closest_on_triangle, cross, dot, scale, sub};
 
 /// A node splits when it holds more triangles than this (leaves hold 4 to 8).
 pub(super) const LEAF_SIZE: usize = 8;
@@ -200,6 +200,39 @@ impl Bvh {
         found.map(|(t, q)| (t, q, best))
     }
 
+    /// The tree-order indices of the triangles whose bounding boxes meet the box
+    /// `[lo, hi]` (a superset of the triangles that meet the box), appended to `out`.
+    pub fn overlapping(&self, lo: [f64; 3], hi: [f64; 3], out: &mut Vec<usize>) {
+        let Some(root) = self.nodes.first() else {
+            return;
+        };
+        let meets = |n: &Node| (0..3).all(|k| n.lo[k] <= hi[k] && lo[k] <= n.hi[k]);
+        if !meets(root) {
+            return;
+        }
+        let mut stack = [0u32; STACK];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if node.is_leaf() {
+                for t in node.start as usize..node.end as usize {
+                    let (tlo, thi) = bounds(self.tris[t].into_iter());
+                    if (0..3).all(|k| tlo[k] <= hi[k] && lo[k] <= thi[k]) {
+                        out.push(t);
+                    }
+                }
+            } else {
+                for c in [node.left, node.left + 1] {
+                    if meets(&self.nodes[c as usize]) {
+                        stack[sp] = c;
+                        sp += 1;
+                    }
+                }
+            }
+        }
+    }
+
     /// Nearest hit `t` in `(t_min, t_max]` of the ray `o + t d`, with its tree-order
     /// triangle index.
     pub fn ray(&self, o: [f64; 3], d: [f64; 3], t_min: f64, t_max: f64) -> Option<(f64, usize)> {
@@ -260,94 +293,16 @@ fn bounds(points: impl Iterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
     (lo, hi)
 }
 
-/// Closest point to `p` on the triangle `abc`, by its Voronoi regions (Ericson,
-/// *Real-Time Collision Detection*, 5.1.5). An interior closest point is the projection
-/// onto the plane; a zero-area triangle, or rounding that contradicts the regions, falls
-/// back to the closest point on the three edges, so the result is always on the triangle.
-#[inline]
-pub(super) fn closest_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
-    let ab = sub(b, a);
-    let ac = sub(c, a);
-    let ap = sub(p, a);
-    let d1 = dot(ab, ap);
-    let d2 = dot(ac, ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = sub(p, b);
-    let d3 = dot(ab, bp);
-    let d4 = dot(ac, bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let den = d1 - d3;
-        if den > 0.0 {
-            return add(a, scale(ab, d1 / den));
-        }
-        return closest_on_edges(p, a, b, c);
-    }
-    let cp = sub(p, c);
-    let d5 = dot(ab, cp);
-    let d6 = dot(ac, cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let den = d2 - d6;
-        if den > 0.0 {
-            return add(a, scale(ac, d2 / den));
-        }
-        return closest_on_edges(p, a, b, c);
-    }
-    let va = d3 * d6 - d5 * d4;
-    let e1 = d4 - d3;
-    let e2 = d5 - d6;
-    if va <= 0.0 && e1 >= 0.0 && e2 >= 0.0 {
-        let den = e1 + e2;
-        if den > 0.0 {
-            return add(b, scale(sub(c, b), e1 / den));
-        }
-        return closest_on_edges(p, a, b, c);
-    }
-    if va > 0.0 && vb > 0.0 && vc > 0.0 {
-        let n = cross(ab, ac);
-        let nn = dot(n, n);
-        if nn > 0.0 && nn.is_finite() {
-            return sub(p, scale(n, dot(n, ap) / nn));
-        }
-    }
-    closest_on_edges(p, a, b, c)
-}
-
-/// Closest point to `p` on the boundary of triangle `abc` (all of a degenerate one).
-fn closest_on_edges(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
-    let mut best = a;
-    let mut best_d2 = f64::INFINITY;
-    for (u, v) in [(a, b), (b, c), (c, a)] {
-        let q = closest_on_segment(p, u, v);
-        let d = sub(p, q);
-        let d2 = dot(d, d);
-        if d2 < best_d2 {
-            best_d2 = d2;
-            best = q;
-        }
-    }
-    best
-}
-
-/// Closest point to `p` on the segment `uv` (`u` for a zero-length one).
-#[inline]
-fn closest_on_segment(p: [f64; 3], u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    let e = sub(v, u);
-    let ee = dot(e, e);
-    if ee.is_nan() || ee <= 0.0 {
-        return u;
-    }
-    let t = (dot(sub(p, u), e) / ee).clamp(0.0, 1.0);
-    add(u, scale(e, t))
+/// Whether two triangles cross: an edge of one passes through the other (strictly
+/// inside the edge). Coplanar triangles never cross by this test.
+pub(super) fn triangles_cross(t: &[[f64; 3]; 3], u: &[[f64; 3]; 3]) -> bool {
+    let edge_through = |a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]| {
+        (0..3).any(|i| {
+            let (p, q) = (a[i], a[(i + 1) % 3]);
+            ray_triangle(p, sub(q, p), b[0], b[1], b[2]).is_some_and(|s| s > 0.0 && s < 1.0)
+        })
+    };
+    edge_through(t, u) || edge_through(u, t)
 }
 
 /// Relative tolerance on the barycentric coordinates of a ray hit, so that a ray through

@@ -10,15 +10,21 @@
 //! Steps (Labelle & Shewchuk, "Isosurface Stuffing", SIGGRAPH 2007):
 //! 1. `octree`: a balanced octree whose cells have size `h` wherever the boundary may
 //!    pass (|f(centre)| < half-diagonal + h; [`Domain::spacing_near`] may ask for less
-//!    detail on parts of the boundary), smaller where the domain asks for it
-//!    ([`Domain::sizing`]: thin parts, down to `h / 2^refine_levels`), and coarser away
-//!    from the boundary.
+//!    detail on parts of the boundary), as small as the domain's [`SizingFeature`]s ask
+//!    where they reach (thin parts and gaps: no fixed floor), and coarser away from the
+//!    boundary. The tet count is estimated from the features before the tree is built
+//!    and from the tree before anything else; a run over [`StuffingOptions::max_tets`]
+//!    is refused with the figure.
 //! 2. `background`: the octree's BCC tetrahedralisation (graded, conforming).
 //! 3. `stuffing`: domain values at the lattice vertices, cut points on sign-changing
-//!    edges, warping of vertices too close to a cut point, and the stencils that fill
-//!    each background tet with its inside part.
+//!    edges, warping of vertices too close to a cut point (the paper's α everywhere), and
+//!    the stencils that fill each background tet with its inside part.
 //! 4. `repair`: pinches below the lattice resolution (tets touching along an edge or at
-//!    a vertex only) are undone by dropping the smaller side, and reported.
+//!    a vertex only) are undone by dropping the smaller side; their places are returned
+//!    ([`VolumeMesh::pinches`]) so a caller can refine there and mesh again.
+//! 5. `quality`: where a graded transition or a guarded warp left a tet with a small
+//!    dihedral angle, its vertices are moved (inside freely, on the boundary along it) to
+//!    raise the smallest angle of their stars to [`StuffingOptions::min_dihedral_deg`].
 //!
 //! Conventions: lengths in the domain's units; output tets positively oriented; vertex
 //! kinds from the sign (inside: interior) and [`Domain::boundary_kind`] (on the zero
@@ -27,7 +33,9 @@
 mod background;
 mod csr;
 mod octree;
+mod quality;
 mod repair;
+mod sizing;
 mod stuffing;
 
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
@@ -36,8 +44,11 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::geom::{norm, scale, sub};
 use crate::tet::{TetMesh, VertexKind};
 use octree::{Cell, Key, Octree};
+pub use quality::QualityStats;
+pub use sizing::SizingFeature;
 
 /// A region to mesh, given implicitly.
 pub trait Domain: Sync {
@@ -66,14 +77,43 @@ pub trait Domain: Sync {
         None
     }
 
+    /// The point of the boundary nearest to `p` (used to keep boundary vertices on the
+    /// boundary when the quality step moves them). The default takes Newton steps on
+    /// [`Domain::value`] with a central-difference gradient, which is exact in one step
+    /// for a signed distance.
+    fn project(&self, p: [f64; 3]) -> [f64; 3] {
+        let mut q = p;
+        for _ in 0..4 {
+            let f = self.value(q);
+            if f == 0.0 {
+                break;
+            }
+            let step = 1e-6 * (1.0 + norm(q));
+            let g: [f64; 3] = std::array::from_fn(|k| {
+                let mut a = q;
+                let mut b = q;
+                a[k] -= step;
+                b[k] += step;
+                (self.value(b) - self.value(a)) / (2.0 * step)
+            });
+            let gg = crate::geom::dot(g, g);
+            if !(gg > 0.0 && gg.is_finite()) {
+                break;
+            }
+            q = sub(q, scale(g, f / gg));
+        }
+        q
+    }
+
     /// Which boundary a point on the zero set lies on.
     fn boundary_kind(&self, p: [f64; 3]) -> VertexKind;
 
     /// A box `(min, max)` that contains the whole region.
     fn bounds(&self) -> ([f64; 3], [f64; 3]);
 
-    /// Points where the lattice spacing must not exceed the given length (thin parts).
-    fn sizing(&self) -> Vec<([f64; 3], f64)> {
+    /// Where the lattice must be finer than `h` (thin parts and gaps, and whatever a
+    /// caller learned from an earlier mesh); see [`SizingFeature`].
+    fn sizing(&self) -> Vec<SizingFeature> {
         Vec::new()
     }
 
@@ -92,18 +132,27 @@ pub trait Domain: Sync {
 /// Options of the stuffing mesher.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StuffingOptions {
-    /// Lattice spacing (cell size) along the boundary, in the domain's units.
+    /// Lattice spacing (cell size) along the boundary where no sizing feature asks for
+    /// less, in the domain's units.
     pub h: f64,
-    /// How many halvings below `h` thin parts may ask for (default 3: down to `h/8`).
-    pub refine_levels: u32,
+    /// The budget: the most tets a run may produce (estimated before meshing; default
+    /// [`DEFAULT_MAX_TETS`]). A run estimated above it is refused with the estimate.
+    pub max_tets: usize,
+    /// The quality step raises every tet's smallest dihedral angle to at least this
+    /// many degrees where it can (default 10; 0 turns the step off).
+    pub min_dihedral_deg: f64,
 }
 
+/// The default tet budget of a volume mesh: 20 million.
+pub const DEFAULT_MAX_TETS: usize = 20_000_000;
+
 impl StuffingOptions {
-    /// Spacing `h` with the default refinement floor.
+    /// Spacing `h`, the default budget and quality target.
     pub fn new(h: f64) -> Self {
         StuffingOptions {
             h,
-            refine_levels: 3,
+            max_tets: DEFAULT_MAX_TETS,
+            min_dihedral_deg: 10.0,
         }
     }
 }
@@ -115,6 +164,13 @@ pub struct StuffingStats {
     pub h: f64,
     /// Smallest cell size used.
     pub finest_cell: f64,
+    /// Sizing features the domain gave.
+    pub sizing_features: usize,
+    /// The budget's floor on the spacing features may ask for, when it bound (thin
+    /// parts finer than it were meshed at it; their topology may be lost).
+    pub spacing_floor: Option<f64>,
+    /// The tet count estimated from the octree before meshing.
+    pub estimated_tets: usize,
     /// Octree leaves.
     pub octree_leaves: usize,
     /// Background lattice vertices and tets.
@@ -123,6 +179,8 @@ pub struct StuffingStats {
     pub background_tets: usize,
     /// Lattice vertices warped onto the boundary.
     pub warped_vertices: usize,
+    /// Warps refused because they would have flattened a background tet.
+    pub refused_warps: usize,
     /// Cut points used as boundary vertices.
     pub cut_points: usize,
     /// Output tets that warping made non-positive (0 unless the guarantees fail).
@@ -132,8 +190,12 @@ pub struct StuffingStats {
     /// Interior vertices those drops left on the boundary (now boundary vertices,
     /// slightly inside the true surface).
     pub exposed_vertices: usize,
-    /// Seconds per step: octree, background, lattice values, stuffing, repair.
-    pub seconds: [f64; 5],
+    /// Boundary vertices enclosed by tets, now interior (see [`VolumeMesh::swallowed`]).
+    pub swallowed_vertices: usize,
+    /// What the quality step did.
+    pub quality: QualityStats,
+    /// Seconds per step: octree, background, lattice values, stuffing, repair, quality.
+    pub seconds: [f64; 6],
 }
 
 /// A stuffed volume mesh and its statistics.
@@ -143,174 +205,91 @@ pub struct VolumeMesh {
     pub mesh: TetMesh,
     /// What the run did.
     pub stats: StuffingStats,
+    /// Where pinch repair had to drop tets, with the lattice spacing there: features
+    /// below the resolution (a caller may refine there and mesh again).
+    pub pinches: Vec<([f64; 3], f64)>,
+    /// Vertices on the boundary (warped onto it, or on it) that no boundary face
+    /// touches, with the lattice spacing there: the tets closed round them, swallowing
+    /// a gap below the resolution (typically at the tip of a narrow wedge of the
+    /// outside). They are interior vertices of the mesh.
+    pub swallowed: Vec<([f64; 3], f64)>,
 }
 
-/// Factor on α for edges no longer than h/2 (refined thin parts).
-const THIN_ALPHA_SCALE: f64 = 0.5;
+/// Tets per octree leaf of a BCC lattice (each leaf owns three faces, four tets each).
+const TETS_PER_LEAF: f64 = 12.0;
 
-/// Upper bound on background lattice vertices before the mesher refuses (memory guard).
-const MAX_OCTREE_CELLS: usize = 40_000_000;
+/// Most halvings of `h` a sizing feature may ask for (the integer grid's resolution).
+const MAX_LEVELS: u32 = 30;
 
 /// Mesh `domain` by isosurface stuffing with spacing `options.h` along its boundary.
 pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<VolumeMesh> {
     let h = options.h;
-    let (lo, hi) = domain.bounds();
     if !(h.is_finite() && h > 0.0) {
         return Err(Error::invalid_argument(format!("h = {h} must be positive")));
     }
+    if options.max_tets == 0 {
+        return Err(Error::invalid_argument("max_tets must be positive"));
+    }
+    let (lo, hi) = domain.bounds();
     if (0..3).any(|k| !(lo[k].is_finite() && hi[k].is_finite() && hi[k] >= lo[k])) {
         return Err(Error::invalid_argument(
             "the domain's bounds are not finite",
         ));
     }
-    if options.refine_levels > 10 {
-        return Err(Error::invalid_argument("refine_levels must be at most 10"));
-    }
-
-    // The integer grid: one unit is half the smallest allowed cell.
-    let unit = h / f64::from(1u32 << options.refine_levels) / 2.0;
-    let h_units = 2i64 << options.refine_levels;
-    let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max) + 4.0 * h;
-    let mut root_size = h_units;
-    while (root_size as f64) * unit < extent {
-        root_size *= 2;
-        if root_size > (1i64 << 40) {
-            return Err(Error::invalid_argument(format!(
-                "h = {h} is too small for a domain of extent {extent}"
-            )));
-        }
-    }
-    // Centre the root on the domain.
-    let mid = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-    let origin = mid.map(|m| m - 0.5 * root_size as f64 * unit);
-    let to_point = |k: Key| {
-        [
-            origin[0] + k[0] as f64 * unit,
-            origin[1] + k[1] as f64 * unit,
-            origin[2] + k[2] as f64 * unit,
-        ]
-    };
-    let to_key = |p: [f64; 3]| [0, 1, 2].map(|k| ((p[k] - origin[k]) / unit).floor() as i64);
-    let root = Cell {
-        origin: [0, 0, 0],
-        size: root_size,
-    };
+    let features: Vec<SizingFeature> = domain
+        .sizing()
+        .into_iter()
+        .filter(|f| f.is_valid() && f.spacing < h)
+        .collect();
 
     let mut clock = Instant::now();
-    let mut seconds = [0.0; 5];
+    let mut seconds = [0.0; 6];
     let mut lap = |i: usize| {
         seconds[i] = clock.elapsed().as_secs_f64();
         clock = Instant::now();
     };
 
-    // 1. Octree.
-    let sizing: Vec<(Key, i64)> = domain
-        .sizing()
-        .into_iter()
-        .filter(|(p, s)| p.iter().all(|c| c.is_finite()) && s.is_finite() && *s > 0.0)
-        .map(|(p, s)| (to_key(p), ((s / unit) as i64).max(2)))
-        .collect();
-    let table = octree::sizing_table(root, &sizing);
-    let mut cells_seen = 0usize;
-    let mut too_big = false;
-    // Leaves whose closed cube lies wholly outside the region (value at the centre
-    // beyond the half diagonal): tets touching only such leaves produce nothing.
-    let mut dead: HashSet<Cell> = HashSet::default();
-    // Every evaluated cell's centre value (exact below its band, else a bound).
-    let mut centre_values: HashMap<Cell, f64> = HashMap::default();
-    let tree = Octree::build(root, |cells| {
-        cells_seen += cells.len();
-        if cells_seen > MAX_OCTREE_CELLS {
-            too_big = true;
-            return vec![false; cells.len()];
+    // 1. Octree, within the budget: the finest spacing the features may ask for is
+    // the floor that fits their estimate; a tree still over it doubles the floor.
+    let mut floor = budget_floor(&features, options.max_tets as f64, h);
+    let (grid, tree, features) = loop {
+        let clamped = clamp_spacing(&features, floor);
+        let grid = Grid::new(lo, hi, h, &clamped)?;
+        match build_octree(domain, &grid, &clamped, options) {
+            Ok(tree) => break (grid, tree, clamped),
+            Err(e)
+                if e.kind() != ErrorKind::OverBudget
+                    || floor.is_some_and(|f| f >= h)
+                    || clamped.is_empty() =>
+            {
+                return Err(e)
+            }
+            Err(_) => {
+                let finest = clamped.iter().map(|f| f.spacing).fold(h, f64::min);
+                floor = Some((2.0 * finest).min(h));
+            }
         }
-        let centres: Vec<[f64; 3]> = cells.iter().map(|c| to_point(c.center())).collect();
-        // All cells of one level have the same size.
-        let half_diagonal = 0.5 * 3f64.sqrt() * cells.first().map_or(0, |c| c.size) as f64 * unit;
-        let coarsest = domain.coarsest_spacing(h).max(h);
-        let values = domain.values_within(&centres, half_diagonal + coarsest);
-        cells
-            .iter()
-            .zip(values)
-            .map(|(cell, f)| {
-                centre_values.insert(*cell, f);
-                if f > half_diagonal * (1.0 + 1e-9) {
-                    dead.insert(*cell);
-                }
-                let thin = table.get(cell).is_some_and(|&req| req < cell.size);
-                if thin {
-                    return true;
-                }
-                if f.abs() >= half_diagonal + coarsest {
-                    return false;
-                }
-                let size = cell.size as f64 * unit;
-                let wanted = domain.spacing_near(to_point(cell.center()), h).max(h);
-                f.abs() < half_diagonal + wanted && size > wanted * (1.0 + 1e-9)
-            })
-            .collect()
-    });
-    if too_big {
-        return Err(Error::new(
-            ErrorKind::InvalidArgument,
-            format!("h = {h} asks for more than {MAX_OCTREE_CELLS} octree cells; use a larger h"),
-        ));
-    }
-    let leaves = tree.leaves();
-    let finest = leaves.iter().map(|c| c.size).min().unwrap_or(root_size);
+    };
     lap(0);
 
     // 2. Background BCC tetrahedralisation.
-    let background = background::tetrahedralize(&tree, &|c| dead.contains(c));
-    let positions: Vec<[f64; 3]> = background.keys.iter().map(|&k| to_point(k)).collect();
+    let background = background::tetrahedralize(&tree.octree, &|c| tree.dead.contains(c));
+    let positions: Vec<[f64; 3]> = background.keys.iter().map(|&k| grid.point(k)).collect();
     lap(1);
+
     // Only signs matter at lattice vertices (cut points are found on the true function).
-    // A vertex inside a leaf whose centre value exceeds the half diagonal has that sign
-    // (the function is 1-Lipschitz); only the others are evaluated.
-    let mut values = vec![0.0; positions.len()];
-    let mut unknown = Vec::new();
-    for (v, &k) in background.keys.iter().enumerate() {
-        let known = tree.leaf_containing(k).and_then(|leaf| {
-            let f = *centre_values.get(&leaf)?;
-            if leaf.center() == k {
-                // The leaf's own centre: its value is known already (sign exact).
-                return (f != 0.0).then_some(f);
-            }
-            let half_diagonal = 0.5 * 3f64.sqrt() * leaf.size as f64 * unit;
-            (f.abs() > half_diagonal * (1.0 + 1e-6))
-                .then(|| f.signum() * (f.abs() - half_diagonal).max(1e-6 * half_diagonal))
-        });
-        match known {
-            Some(f) => values[v] = f,
-            None => unknown.push(v),
-        }
-    }
-    let points: Vec<[f64; 3]> = unknown.iter().map(|&v| positions[v]).collect();
-    for (&v, f) in unknown.iter().zip(domain.values_within(&points, h)) {
-        values[v] = f;
-    }
+    let values = lattice_values(domain, &grid, &tree, &background.keys, &positions);
     lap(2);
 
-    // 3. Stuffing.
+    // 3. Stuffing, with the paper's α on every edge.
     let keys = &background.keys;
-    // The paper's α for axis-parallel and other edges; in cells finer than h (thin
-    // parts, at most a few cells across) half of it, since a full warp there moves a
-    // vertex by a large fraction of the part's thickness and can cut it in two.
     let alpha = |a: u32, b: u32| {
         let (ka, kb) = (keys[a as usize], keys[b as usize]);
-        let d = [0, 1, 2].map(|k| (ka[k] - kb[k]).abs());
-        let axis_parallel = d.iter().filter(|&&x| x != 0).count() == 1;
-        let base = if axis_parallel {
+        let axis_parallel = (0..3).filter(|&k| ka[k] != kb[k]).count() == 1;
+        if axis_parallel {
             stuffing::ALPHA_LONG
         } else {
             stuffing::ALPHA_SHORT
-        };
-        let length2 = d.iter().map(|&x| x * x).sum::<i64>();
-        let refined = 4 * length2 <= h_units * h_units;
-        if refined {
-            base * THIN_ALPHA_SCALE
-        } else {
-            base
         }
     };
     let value = |p: [f64; 3]| domain.value(p);
@@ -323,7 +302,6 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         &alpha,
         &background.tets,
     );
-
     lap(3);
 
     // 4. Pinches below the lattice resolution.
@@ -332,12 +310,354 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     for &v in &repair.exposed {
         interior[v as usize] = false;
     }
-
+    // A boundary vertex the tets close round lies inside the mesh: it is interior now
+    // (on the true surface, but no boundary face touches it).
+    for &v in &repair.buried {
+        interior[v as usize] = true;
+    }
+    let site = |&v: &u32| {
+        (
+            stuffed.positions[v as usize],
+            grid.spacing_at(&tree.octree, keys, v),
+        )
+    };
+    let pinches = repair.sites.iter().map(site).collect();
+    let swallowed = repair.buried.iter().map(site).collect();
     lap(4);
 
-    // Keep the vertices the tets use, in index order.
-    let mut new_id = vec![u32::MAX; stuffed.positions.len()];
-    for t in &stuffed.tets {
+    // 5. Quality: lift the smallest dihedral angles where transitions left them low.
+    let exposed: HashSet<u32> = repair.exposed.iter().copied().collect();
+    let mobility: Vec<quality::Mobility> = (0..stuffed.positions.len())
+        .map(|v| {
+            if interior[v] {
+                quality::Mobility::Free
+            } else if exposed.contains(&(v as u32)) {
+                quality::Mobility::Fixed
+            } else {
+                quality::Mobility::OnBoundary
+            }
+        })
+        .collect();
+    let quality = quality::improve(
+        &mut stuffed.positions,
+        &stuffed.tets,
+        &mobility,
+        &|p| domain.project(p),
+        options.min_dihedral_deg,
+    );
+    lap(5);
+
+    let mesh = compact(domain, &stuffed.positions, &stuffed.tets, &interior)?;
+    if mesh.num_tets() == 0 {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            format!(
+                "the volume mesh is empty: no lattice vertex at spacing {:.3e} lies inside the region",
+                grid.finest_cell(&tree.octree)
+            ),
+        ));
+    }
+
+    Ok(VolumeMesh {
+        mesh,
+        pinches,
+        swallowed,
+        stats: StuffingStats {
+            h,
+            finest_cell: grid.finest_cell(&tree.octree),
+            sizing_features: features.len(),
+            spacing_floor: floor,
+            estimated_tets: tree.estimated_tets,
+            octree_leaves: tree.leaves,
+            background_vertices: background.keys.len(),
+            background_tets: background.tets.len(),
+            warped_vertices: stuffed.warped,
+            refused_warps: stuffed.refused_warps,
+            cut_points: stuffed.cut_points,
+            inverted_tets: stuffed.inverted,
+            pinch_tets_removed: repair.removed_tets,
+            exposed_vertices: repair.exposed.len(),
+            swallowed_vertices: repair.buried.len(),
+            quality,
+            seconds,
+        },
+    })
+}
+
+/// The integer grid of the octree: one unit is half the smallest cell any feature
+/// asks for, so corners, centres and face centres of every cell are integer points.
+struct Grid {
+    h: f64,
+    unit: f64,
+    origin: [f64; 3],
+    root: Cell,
+}
+
+impl Grid {
+    fn new(lo: [f64; 3], hi: [f64; 3], h: f64, features: &[SizingFeature]) -> Result<Grid> {
+        let finest = features.iter().map(|f| f.spacing).fold(h, f64::min);
+        let levels = (h / finest).log2().ceil().clamp(0.0, MAX_LEVELS as f64) as u32;
+        let unit = h / f64::from(1u32 << levels) / 2.0;
+        let h_units = 2i64 << levels;
+        let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max) + 4.0 * h;
+        let mut root_size = h_units;
+        while (root_size as f64) * unit < extent {
+            root_size *= 2;
+            if root_size > (1i64 << 52) {
+                return Err(Error::invalid_argument(format!(
+                    "h = {h} is too small for a domain of extent {extent}"
+                )));
+            }
+        }
+        // Centre the root on the domain.
+        let mid = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
+        let origin = mid.map(|m| m - 0.5 * root_size as f64 * unit);
+        Ok(Grid {
+            h,
+            unit,
+            origin,
+            root: Cell {
+                origin: [0, 0, 0],
+                size: root_size,
+            },
+        })
+    }
+
+    fn point(&self, k: Key) -> [f64; 3] {
+        [
+            self.origin[0] + k[0] as f64 * self.unit,
+            self.origin[1] + k[1] as f64 * self.unit,
+            self.origin[2] + k[2] as f64 * self.unit,
+        ]
+    }
+
+    fn length(&self, units: i64) -> f64 {
+        units as f64 * self.unit
+    }
+
+    fn finest_cell(&self, tree: &Octree) -> f64 {
+        self.length(
+            tree.leaves()
+                .iter()
+                .map(|c| c.size)
+                .min()
+                .unwrap_or(self.root.size),
+        )
+    }
+
+    /// The size of the leaf around lattice vertex `v` (a cut point takes the spacing
+    /// `h` of the boundary; pinch sites are reported with it).
+    fn spacing_at(&self, tree: &Octree, keys: &[Key], v: u32) -> f64 {
+        keys.get(v as usize)
+            .and_then(|&k| tree.leaf_containing(k))
+            .map_or(self.h, |leaf| self.length(leaf.size))
+    }
+}
+
+/// The octree and what its construction learned about the domain.
+struct Tree {
+    octree: Octree,
+    /// Leaves whose closed cube lies wholly outside the region (value at the centre
+    /// beyond the half diagonal): tets touching only such leaves produce nothing.
+    dead: HashSet<Cell>,
+    /// The value at every evaluated cell's centre, by key (a key is the centre of at
+    /// most one cell; exact below the cell's band, else a bound of the right sign).
+    centre_values: HashMap<Key, f64>,
+    leaves: usize,
+    estimated_tets: usize,
+}
+
+/// The tets the features ask for, were no spacing finer than `floor`: the volume each
+/// refines divided by its cells' volume (about half of the cells near a boundary are
+/// inside).
+fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
+    features
+        .iter()
+        .map(|f| {
+            let clamped = SizingFeature {
+                spacing: f.spacing.max(floor),
+                ..*f
+            };
+            0.5 * TETS_PER_LEAF * clamped.region_volume() / clamped.spacing.powi(3)
+        })
+        .sum()
+}
+
+/// The smallest spacing the features may ask for within `budget` tets (`None`: no
+/// floor needed), found by bisection on a log scale between their finest spacing and
+/// `h`.
+fn budget_floor(features: &[SizingFeature], budget: f64, h: f64) -> Option<f64> {
+    if features.is_empty() || feature_estimate(features, 0.0) <= budget {
+        return None;
+    }
+    let finest = features.iter().map(|f| f.spacing).fold(h, f64::min);
+    if feature_estimate(features, h) > budget {
+        return Some(h);
+    }
+    let (mut lo, mut hi) = (finest.ln(), h.ln());
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if feature_estimate(features, mid.exp()) > budget {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(hi.exp())
+}
+
+/// The features with no spacing below `floor` (all of them as they are without one).
+fn clamp_spacing(features: &[SizingFeature], floor: Option<f64>) -> Vec<SizingFeature> {
+    match floor {
+        None => features.to_vec(),
+        Some(floor) => features
+            .iter()
+            .map(|f| SizingFeature {
+                spacing: f.spacing.max(floor),
+                ..*f
+            })
+            .collect(),
+    }
+}
+
+fn over_budget(estimate: f64, budget: usize, finest: f64) -> Error {
+    Error::new(
+        ErrorKind::OverBudget,
+        format!(
+            "the volume mesh would have about {estimate:.2e} tets (smallest cells {finest:.2e}), over the budget of {budget} tets: raise it with --max-tets, or pass a larger --h"
+        ),
+    )
+}
+
+/// Refine from the root, level by level: a cell is split while the boundary may pass
+/// through it and it is larger than the spacing wanted there, or while a sizing
+/// feature that reaches it asks for smaller cells. Then balance, and estimate the tets.
+fn build_octree(
+    domain: &dyn Domain,
+    grid: &Grid,
+    features: &[SizingFeature],
+    options: &StuffingOptions,
+) -> Result<Tree> {
+    let h = grid.h;
+    let coarsest = domain.coarsest_spacing(h).max(h);
+    // Cells evaluated before the build gives up: a tree this large would be far over
+    // the budget whatever lies where.
+    let max_cells = (options.max_tets as f64 / TETS_PER_LEAF * 8.0) as usize + 1_000_000;
+    let mut cells_seen = 0usize;
+    let mut too_big = false;
+    let mut dead: HashSet<Cell> = HashSet::default();
+    let mut centre_values: HashMap<Key, f64> = HashMap::default();
+    let mut lists = sizing::FeatureLists::new(features, grid.root, h);
+    let to_point = |k: Key| grid.point(k);
+    let octree = Octree::build(grid.root, |cells| {
+        cells_seen += cells.len();
+        if cells_seen > max_cells {
+            too_big = true;
+            return vec![false; cells.len()];
+        }
+        let centres: Vec<[f64; 3]> = cells.iter().map(|c| grid.point(c.center())).collect();
+        // All cells of one level have the same size.
+        let size = grid.length(cells.first().map_or(0, |c| c.size));
+        let half_diagonal = 0.5 * 3f64.sqrt() * size;
+        let values = domain.values_within(&centres, half_diagonal + coarsest);
+        let thin = lists.level(cells, &to_point, grid.unit);
+        cells
+            .iter()
+            .zip(values)
+            .zip(thin)
+            .map(|((cell, f), thin_spacing)| {
+                centre_values.insert(cell.center(), f);
+                if f > half_diagonal * (1.0 + 1e-9) {
+                    dead.insert(*cell);
+                }
+                // Cell sizes are powers of two: take the one nearest the spacing asked
+                // for (within a factor √2).
+                if thin_spacing * std::f64::consts::SQRT_2 < size {
+                    return true;
+                }
+                if f.abs() >= half_diagonal + coarsest {
+                    return false;
+                }
+                let wanted = domain.spacing_near(grid.point(cell.center()), h).max(h);
+                f.abs() < half_diagonal + wanted && size > wanted * (1.0 + 1e-9)
+            })
+            .collect()
+    });
+    let leaves = octree.leaves();
+    let live = leaves.iter().filter(|c| !dead.contains(c)).count();
+    let estimated_tets = (TETS_PER_LEAF * live as f64) as usize;
+    let finest = grid.length(
+        leaves
+            .iter()
+            .map(|c| c.size)
+            .min()
+            .unwrap_or(grid.root.size),
+    );
+    if too_big {
+        let estimate = TETS_PER_LEAF * max_cells as f64;
+        return Err(over_budget(estimate, options.max_tets, finest));
+    }
+    if estimated_tets > options.max_tets {
+        return Err(over_budget(estimated_tets as f64, options.max_tets, finest));
+    }
+    Ok(Tree {
+        leaves: leaves.len(),
+        octree,
+        dead,
+        centre_values,
+        estimated_tets,
+    })
+}
+
+/// The domain's value at each lattice vertex. The centre of a cell evaluated while
+/// building the tree (a leaf's centre, or a corner its parent's centre became) has its
+/// value already; a vertex inside a leaf whose centre value exceeds the half diagonal
+/// has that sign (the function is 1-Lipschitz); only the others are evaluated, exactly
+/// within `h`.
+fn lattice_values(
+    domain: &dyn Domain,
+    grid: &Grid,
+    tree: &Tree,
+    keys: &[Key],
+    positions: &[[f64; 3]],
+) -> Vec<f64> {
+    let mut values = vec![0.0; positions.len()];
+    let mut unknown = Vec::new();
+    for (v, &k) in keys.iter().enumerate() {
+        if let Some(&f) = tree.centre_values.get(&k) {
+            if f != 0.0 {
+                values[v] = f;
+                continue;
+            }
+        }
+        let known = tree.octree.leaf_containing(k).and_then(|leaf| {
+            let f = *tree.centre_values.get(&leaf.center())?;
+            let half_diagonal = 0.5 * 3f64.sqrt() * grid.length(leaf.size);
+            (f.abs() > half_diagonal * (1.0 + 1e-6))
+                .then(|| f.signum() * (f.abs() - half_diagonal).max(1e-6 * half_diagonal))
+        });
+        match known {
+            Some(f) => values[v] = f,
+            None => unknown.push(v),
+        }
+    }
+    let points: Vec<[f64; 3]> = unknown.iter().map(|&v| positions[v]).collect();
+    for (&v, f) in unknown.iter().zip(domain.values_within(&points, grid.h)) {
+        values[v] = f;
+    }
+    values
+}
+
+/// The tet mesh of the kept tets over the vertices they use, in index order, with
+/// vertex kinds: interior where the sign was negative, else the domain's boundary kind.
+fn compact(
+    domain: &dyn Domain,
+    positions: &[[f64; 3]],
+    tets: &[[u32; 4]],
+    interior: &[bool],
+) -> Result<TetMesh> {
+    let mut new_id = vec![u32::MAX; positions.len()];
+    for t in tets {
         for &v in t {
             new_id[v as usize] = 0;
         }
@@ -347,7 +667,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     for (v, id) in new_id.iter_mut().enumerate() {
         if *id == 0 {
             *id = out_positions.len() as u32;
-            let p = stuffed.positions[v];
+            let p = positions[v];
             out_positions.push(p);
             kinds.push(if interior[v] {
                 VertexKind::Interior
@@ -356,27 +676,6 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             });
         }
     }
-    let tets: Vec<[u32; 4]> = stuffed
-        .tets
-        .iter()
-        .map(|t| t.map(|v| new_id[v as usize]))
-        .collect();
-    let mesh = TetMesh::new(out_positions, tets, kinds)?;
-
-    Ok(VolumeMesh {
-        mesh,
-        stats: StuffingStats {
-            h,
-            finest_cell: finest as f64 * unit,
-            octree_leaves: leaves.len(),
-            background_vertices: background.keys.len(),
-            background_tets: background.tets.len(),
-            warped_vertices: stuffed.warped,
-            cut_points: stuffed.cut_points,
-            inverted_tets: stuffed.inverted,
-            pinch_tets_removed: repair.removed_tets,
-            exposed_vertices: repair.exposed.len(),
-            seconds,
-        },
-    })
+    let tets: Vec<[u32; 4]> = tets.iter().map(|t| t.map(|v| new_id[v as usize])).collect();
+    TetMesh::new(out_positions, tets, kinds)
 }

@@ -6,7 +6,7 @@
 //! a caller-supplied rule and then balanced: cells that touch (by a face, an edge or a
 //! corner) differ in size by at most a factor of two.
 
-use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
+use rustc_hash::FxHashSet as HashSet;
 
 /// An integer point in units.
 pub(crate) type Key = [i64; 3];
@@ -55,23 +55,35 @@ impl Octree {
     /// Refine from `root`, level by level: `refine` gets the cells of one level and says
     /// which to split (cells of size 2, the smallest, are never split). Then balance.
     pub fn build(root: Cell, mut refine: impl FnMut(&[Cell]) -> Vec<bool>) -> Octree {
-        let mut leaves = HashSet::default();
+        // The cells that are split; a cell is a leaf when its parent is split and it
+        // is not.
+        let mut split: HashSet<Cell> = HashSet::default();
         let mut level = vec![root];
         while !level.is_empty() {
-            let split = refine(&level);
+            let decisions = refine(&level);
             let mut next = Vec::new();
-            for (cell, split) in level.into_iter().zip(split) {
-                if split && cell.size > 2 {
+            for (cell, decision) in level.into_iter().zip(decisions) {
+                if decision && cell.size > 2 {
+                    split.insert(cell);
                     next.extend(cell.children());
-                } else {
-                    leaves.insert(cell);
                 }
             }
             level = next;
         }
-        let mut tree = Octree { root, leaves };
-        tree.balance();
-        tree
+        balance(root, &mut split);
+        let mut leaves: HashSet<Cell> = HashSet::default();
+        if split.contains(&root) {
+            for cell in &split {
+                for child in cell.children() {
+                    if !split.contains(&child) {
+                        leaves.insert(child);
+                    }
+                }
+            }
+        } else {
+            leaves.insert(root);
+        }
+        Octree { root, leaves }
     }
 
     /// The leaves, sorted (deterministic order).
@@ -84,7 +96,7 @@ impl Octree {
     /// Whether an integer point lies in the root cube (closed on the low side, open on
     /// the high side).
     pub fn contains(&self, p: Key) -> bool {
-        (0..3).all(|k| p[k] >= self.root.origin[k] && p[k] < self.root.origin[k] + self.root.size)
+        contains(self.root, p)
     }
 
     /// The leaf whose half-open cube contains `p`, if `p` is in the root.
@@ -100,11 +112,7 @@ impl Octree {
         }
         let mut size = min_size.max(2);
         while size <= self.root.size {
-            let origin = [0, 1, 2].map(|k| {
-                let rel = p[k] - self.root.origin[k];
-                self.root.origin[k] + rel.div_euclid(size) * size
-            });
-            let cell = Cell { origin, size };
+            let cell = cell_at(self.root, p, size);
             if self.leaves.contains(&cell) {
                 return Some(cell);
             }
@@ -112,31 +120,67 @@ impl Octree {
         }
         None
     }
+}
 
-    /// Split leaves until neighbours (across faces, edges and corners) differ in size by
-    /// at most a factor of two.
-    fn balance(&mut self) {
-        let mut queue: Vec<Cell> = self.leaves();
-        while let Some(cell) = queue.pop() {
-            if !self.leaves.contains(&cell) {
-                continue;
-            }
-            for probe in neighbour_probes(cell) {
-                // Only a neighbour larger than twice this cell matters.
-                let Some(n) = self.leaf_containing_from(probe, 4 * cell.size) else {
+fn contains(root: Cell, p: Key) -> bool {
+    (0..3).all(|k| p[k] >= root.origin[k] && p[k] < root.origin[k] + root.size)
+}
+
+/// The cell of side `size` (a power of two dividing the root's) that contains `p`.
+fn cell_at(root: Cell, p: Key, size: i64) -> Cell {
+    let origin = [0, 1, 2].map(|k| {
+        let rel = p[k] - root.origin[k];
+        root.origin[k] + rel.div_euclid(size) * size
+    });
+    Cell { origin, size }
+}
+
+/// Split cells until leaves that touch (across faces, edges and corners) differ in size
+/// by at most a factor of two. Bottom-up by size: every leaf of side `s` needs the cells
+/// of side `2s` around it to exist, i.e. their ancestors to be split. Splitting a cell
+/// only makes leaves of side ≥ `2s`, which a later pass (a larger `s`) looks at, so one
+/// sweep suffices, and each leaf costs a lookup per neighbour.
+fn balance(root: Cell, split: &mut HashSet<Cell>) {
+    if !split.contains(&root) {
+        return;
+    }
+    // Parents of the leaves of side `s` have side `2s`; walk sizes upward.
+    let mut size = 2;
+    while size * 4 <= root.size {
+        let mut parents: Vec<Cell> = split
+            .iter()
+            .filter(|c| c.size == 2 * size)
+            .copied()
+            .collect();
+        parents.sort_unstable();
+        let mut required: Vec<Cell> = Vec::new();
+        for parent in parents {
+            for leaf in parent.children() {
+                if split.contains(&leaf) {
                     continue;
-                };
-                if n.size > 2 * cell.size {
-                    self.leaves.remove(&n);
-                    for child in n.children() {
-                        self.leaves.insert(child);
-                        queue.push(child);
+                }
+                for probe in neighbour_probes(leaf) {
+                    if !contains(root, probe) {
+                        continue;
                     }
-                    // The split may leave `cell` still too small next to a child; check again.
-                    queue.push(cell);
+                    // The neighbour of side 2s must exist: its parent must be split.
+                    let grand = cell_at(root, probe, 4 * size);
+                    if !split.contains(&grand) {
+                        required.push(grand);
+                    }
                 }
             }
         }
+        required.sort_unstable();
+        required.dedup();
+        for cell in required {
+            // Split the cell and its ancestors (which may be leaves themselves).
+            let mut c = cell;
+            while split.insert(c) && c.size < root.size {
+                c = cell_at(root, c.origin, 2 * c.size);
+            }
+        }
+        size *= 2;
     }
 }
 
@@ -152,28 +196,6 @@ fn neighbour_probes(cell: Cell) -> impl Iterator<Item = Key> {
             c[2] + d[2] * reach,
         ]
     })
-}
-
-/// Record the smallest required cell size at each cell that contains a sizing point, at
-/// every level, so refinement can look it up per cell.
-pub(crate) fn sizing_table(root: Cell, points: &[(Key, i64)]) -> HashMap<Cell, i64> {
-    let mut table: HashMap<Cell, i64> = HashMap::default();
-    for &(p, required) in points {
-        let mut size = root.size;
-        while size >= 2 {
-            let origin = [0, 1, 2].map(|k| {
-                let rel = p[k] - root.origin[k];
-                root.origin[k] + rel.div_euclid(size) * size
-            });
-            let e = table.entry(Cell { origin, size }).or_insert(i64::MAX);
-            *e = (*e).min(required);
-            if size <= required {
-                break;
-            }
-            size /= 2;
-        }
-    }
-    table
 }
 
 #[cfg(test)]

@@ -23,6 +23,13 @@ pub(crate) struct Repair {
     pub removed_tets: usize,
     /// Interior vertices left on the boundary.
     pub exposed: Vec<u32>,
+    /// The pinched vertices of the first round (where the features below the
+    /// resolution are), in index order.
+    pub sites: Vec<u32>,
+    /// Vertices on the boundary (not interior) that no boundary face touches: their
+    /// star closed round them, so a gap or part below the resolution was swallowed
+    /// there. In index order.
+    pub buried: Vec<u32>,
 }
 
 const MAX_ROUNDS: usize = 20;
@@ -56,7 +63,7 @@ pub(crate) fn repair_pinches(
     for _ in 0..MAX_ROUNDS {
         // Vertices are checked independently (in parallel); the sorted union of what
         // they drop does not depend on the thread count.
-        let mut drop: Vec<u32> = candidates
+        let per_vertex: Vec<(u32, Option<Vec<u32>>)> = candidates
             .par_iter()
             .map_init(Scratch::default, |scratch, &v| {
                 let star: Vec<u32> = stars
@@ -65,9 +72,21 @@ pub(crate) fn repair_pinches(
                     .copied()
                     .filter(|&t| alive[t as usize])
                     .collect();
-                scratch.pinch_at(positions, tets, &star, v)
+                (v, scratch.pinch_at(positions, tets, &star, v))
             })
-            .flatten()
+            .collect();
+        if repair.removed_tets == 0 {
+            for (v, d) in &per_vertex {
+                match d {
+                    None if !stars.get(*v as usize).is_empty() => repair.buried.push(*v),
+                    Some(d) if !d.is_empty() => repair.sites.push(*v),
+                    _ => {}
+                }
+            }
+        }
+        let mut drop: Vec<u32> = per_vertex
+            .into_iter()
+            .flat_map(|(_, d)| d.unwrap_or_default())
             .collect();
         drop.sort_unstable();
         drop.dedup();
@@ -183,14 +202,15 @@ struct Scratch {
 impl Scratch {
     /// The tets to drop at vertex `v` with (alive) star `star`: minority fans of each
     /// pinched edge at `v` (more than two boundary faces), minority groups of the star,
-    /// or the whole star when its boundary faces form several fans.
+    /// or the whole star when its boundary faces form several fans. `None` when no
+    /// boundary face touches `v`.
     fn pinch_at(
         &mut self,
         positions: &[[f64; 3]],
         tets: &[[u32; 4]],
         star: &[u32],
         v: u32,
-    ) -> Vec<u32> {
+    ) -> Option<Vec<u32>> {
         // Boundary faces at v: faces through v used by one tet of the star.
         let mut faces: Vec<[u32; 3]> = star
             .iter()
@@ -205,7 +225,7 @@ impl Scratch {
             }
         });
         if boundary.is_empty() {
-            return Vec::new();
+            return None;
         }
         let mut out = Vec::new();
         // Edges at v with more than two boundary faces.
@@ -238,7 +258,7 @@ impl Scratch {
         } else if fans(&boundary, v) > 1 {
             out.extend_from_slice(star);
         }
-        out
+        Some(out)
     }
 
     /// The groups of `star` (connected through faces that contain all of `through`)

@@ -46,6 +46,9 @@ pub(crate) struct Stuffed {
     pub tets: Vec<[u32; 4]>,
     /// Number of lattice vertices warped onto the surface.
     pub warped: usize,
+    /// Violated vertices left unwarped because every warp would flatten a background
+    /// tet around them.
+    pub refused_warps: usize,
     /// Number of cut points used.
     pub cut_points: usize,
     /// Output tets whose volume is not positive after warping (0 when the method's
@@ -117,6 +120,7 @@ pub(crate) fn stuff(
         dot(sub(b, a), cross(sub(c, a), sub(d, a)))
     };
     let mut warped = 0;
+    let mut refused_warps = 0;
     let mut candidates: Vec<(f64, usize)> = Vec::new();
     for v in 0..n {
         // Violating cut points that are still alive, closest first.
@@ -158,6 +162,8 @@ pub(crate) fn stuff(
             for &e in incident.get(v) {
                 alive[e as usize] = false;
             }
+        } else if !candidates.is_empty() {
+            refused_warps += 1;
         }
     }
 
@@ -263,6 +269,7 @@ pub(crate) fn stuff(
         signs,
         tets: out,
         warped,
+        refused_warps,
         cut_points,
         inverted,
     }
