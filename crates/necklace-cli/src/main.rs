@@ -62,6 +62,10 @@ enum Command {
         /// Lattice spacing along the surface (default: bounding-box diagonal / 64).
         #[arg(long)]
         h: Option<f64>,
+        /// The most tets the volume mesh may have: a larger run is refused, and thin
+        /// parts are not refined past it.
+        #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS)]
+        max_tets: usize,
         /// The volume mesher: necklace's isosurface stuffing, or TetGen "pq1.2" (needs a
         /// build with --features tetgen, which is AGPL-3.0).
         #[arg(long, value_enum, default_value = "stuffing")]
@@ -193,12 +197,17 @@ struct MethodArgs {
     /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
     #[arg(long)]
     h: Option<f64>,
+    /// The most tets a volume mesh may have: a larger run is refused, and thin parts
+    /// are not refined past it.
+    #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS)]
+    max_tets: usize,
 }
 
 impl MethodArgs {
     fn volume(&self) -> VolumeOptions {
         VolumeOptions {
             h: self.h,
+            max_tets: self.max_tets,
             ..VolumeOptions::default()
         }
     }
@@ -269,12 +278,14 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             mesh,
             exterior,
             h,
+            max_tets,
             mesher,
             output,
             json,
         } => {
             let options = VolumeOptions {
                 h,
+                max_tets,
                 mesher: match mesher {
                     MesherArg::Stuffing => Mesher::Stuffing,
                     MesherArg::Tetgen => Mesher::Tetgen,
@@ -386,6 +397,7 @@ fn critical(
         Side::Inside
     };
     let volume = pipeline::volume_mesh(&surface, side, volume_options)?;
+    warn(&volume.warnings);
     let result = pipeline::critical_points(&surface, &volume, options)?;
     for step in result.morse_failures() {
         eprintln!(
@@ -481,6 +493,7 @@ fn loops(
 ) -> Result<String> {
     let (surface, _) = read_for_volume(&path)?;
     let report = pipeline::find_necks_with_progress(&surface, options, &ui.bars)?;
+    warn(&report.warnings);
     warn_morse_failures(&report);
     if ui.verbose {
         eprint!("{}", stage_timings(&report));
@@ -514,6 +527,13 @@ fn loops(
         let _ = writeln!(out, "-> {}", file.display());
     }
     Ok(out)
+}
+
+/// Print warnings to stderr, one line each.
+fn warn(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("necklace: warning: {w}");
+    }
 }
 
 /// Print Morse-check failures to stderr.
@@ -645,6 +665,7 @@ fn volume(
         Side::Inside
     };
     let result = pipeline::volume_mesh(&surface, side, options)?;
+    warn(&result.warnings);
     if let Some(output) = &output {
         io::write_tet_mesh(output, &result.mesh, &[])?;
     }
@@ -664,13 +685,26 @@ fn volume(
         report.outer_vertices,
         report.tets
     );
+    let topology = &report.topology;
     let _ = writeln!(
         out,
-        "chi(volume) {}  chi(boundary) {}  dihedral {:.1}..{:.1} deg  hausdorff {:.2e} diag",
+        "topology: {}{}",
+        topology.found,
+        match (&topology.expected, topology.matches) {
+            (Some(_), Some(true)) => " (as the surface predicts)".to_string(),
+            (Some(e), _) => format!(" (the surface predicts {e})"),
+            (None, _) =>
+                " (the surface predicts nothing: it crosses itself or is not a manifold)".into(),
+        }
+    );
+    let _ = writeln!(
+        out,
+        "chi(volume) {}  chi(boundary) {}  dihedral {:.1}..{:.1} deg ({} tets below 10)  hausdorff {:.2e} diag",
         report.euler_volume,
         report.euler_boundary,
         report.min_dihedral_deg,
         report.max_dihedral_deg,
+        report.tets_below_10_deg,
         report.hausdorff_to_surface
     );
     let _ = writeln!(

@@ -612,6 +612,36 @@ mod tests {
     }
 
     #[test]
+    fn the_topology_counts_components_and_boundary_surfaces() {
+        let cube = cube_tets();
+        let t = cube.topology();
+        assert_eq!(
+            t,
+            TetTopology::new(vec![ComponentTopology {
+                euler: 1,
+                boundary_eulers: vec![2]
+            }])
+        );
+        assert_eq!(
+            (t.euler(), t.boundary_components(), t.boundary_euler()),
+            (1, 1, 2)
+        );
+        // Two cubes apart: two components, listed in the canonical order.
+        let mut positions = cube.positions.clone();
+        positions.extend(cube.positions.iter().map(|p| [p[0] + 2.0, p[1], p[2]]));
+        let mut tets = cube.tets.clone();
+        tets.extend(cube.tets.iter().map(|t| t.map(|v| v + 8)));
+        let kinds = TetMesh::classify_boundary(&positions, &tets);
+        let two = TetMesh::new(positions, tets, kinds).unwrap().topology();
+        assert_eq!(two.components.len(), 2);
+        assert_eq!((two.euler(), two.boundary_components()), (2, 2));
+        assert_eq!(
+            two.to_string(),
+            "2 components, χ 2, 2 boundary surfaces of genus 0, 0"
+        );
+    }
+
+    #[test]
     fn regular_tetrahedron_dihedrals() {
         let s = 1.0 / 2f64.sqrt();
         let p = [

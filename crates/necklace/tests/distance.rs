@@ -327,3 +327,86 @@ fn batches_equal_per_point_results_bit_for_bit() {
     }
     assert!(single.iter().any(|&b| f64::from_bits(b) < 0.0));
 }
+
+#[test]
+fn self_intersections_are_the_crossing_pairs_only() {
+    // A closed sphere, and two apart: nothing crosses.
+    let ball = sphere(16.0);
+    let apart = merged(&ball, &translated(&ball, [3.0, 0.0, 0.0]));
+    for mesh in [&ball, &apart] {
+        let sd = SurfaceDistance::new(mesh);
+        assert!(sd.self_intersections(&mesh.triangles).is_empty());
+    }
+    // Two overlapping spheres cross along a circle: every pair joins the two balls.
+    let overlap = merged(&ball, &translated(&ball, [1.0, 0.0, 0.0]));
+    let sd = SurfaceDistance::new(&overlap);
+    let pairs = sd.self_intersections(&overlap.triangles);
+    let first = ball.triangles.len() as u32;
+    assert!(pairs.len() > 10, "{}", pairs.len());
+    assert!(pairs.iter().all(|&[a, b]| a < first && b >= first));
+    // Two triangles that only touch (a corner of one on a side of the other) do not.
+    let touching = SurfaceMesh {
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, -1.0, 1.0],
+            [1.0, -1.0, -1.0],
+        ],
+        triangles: vec![[0, 1, 2], [3, 4, 5]],
+    };
+    let sd = SurfaceDistance::new(&touching);
+    assert!(sd.self_intersections(&touching.triangles).is_empty());
+    // The same second triangle pushed through the first crosses it.
+    let mut through = touching.clone();
+    for p in &mut through.positions[3..] {
+        p[1] += 0.5;
+    }
+    let sd = SurfaceDistance::new(&through);
+    assert_eq!(sd.self_intersections(&through.triangles), vec![[0, 1]]);
+}
+
+#[test]
+fn the_pseudonormal_sign_agrees_with_the_winding_number() {
+    // A closed manifold qualifies; its signs by pseudonormal and by winding number agree
+    // everywhere off the surface, including right next to edges and corners.
+    for mesh in [
+        shape(ShapeKind::Torus, &[("res", 24.0)]),
+        shape(ShapeKind::Dumbbell, &[("res", 32.0)]),
+    ] {
+        let by_winding = SurfaceDistance::new(&mesh);
+        let mut by_normal = SurfaceDistance::new(&mesh);
+        assert!(by_normal.use_pseudonormal_sign(&mesh));
+        let mut state = 7u64;
+        let mut random = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut checked = 0;
+        for i in 0..4000 {
+            // Points near vertices (a tiny offset) and anywhere in the box.
+            let p = if i % 2 == 0 {
+                let v = mesh.positions[(random() * mesh.positions.len() as f64) as usize];
+                [0, 1, 2].map(|k| v[k] + 1e-3 * (random() - 0.5))
+            } else {
+                [0, 1, 2].map(|_| 3.0 * (random() - 0.5))
+            };
+            let (a, b) = (by_winding.signed_distance(p), by_normal.signed_distance(p));
+            assert_eq!(a.abs(), b.abs());
+            if a.abs() > 1e-9 {
+                assert_eq!(a.signum(), b.signum(), "at {p:?}: {a} vs {b}");
+                checked += 1;
+            }
+            let w = by_normal.signed_distance_within(p, 0.1);
+            assert_eq!(w.signum(), a.signum(), "within at {p:?}");
+        }
+        assert!(checked > 3900);
+    }
+    // An open mesh does not qualify.
+    let mut open = sphere(12.0);
+    open.triangles.pop();
+    assert!(!SurfaceDistance::new(&open).use_pseudonormal_sign(&open));
+}

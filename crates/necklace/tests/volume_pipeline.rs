@@ -119,8 +119,25 @@ fn two_overlapping_spheres_mesh_as_their_union() {
     assert_eq!(v.mesh.euler_characteristic(), 1);
 }
 
+/// The genus of every shared mesh (MANIFEST.tsv), for the one whose topology the
+/// surface cannot predict (it crosses itself).
+fn manifest_genus(file: &std::path::Path) -> Option<i64> {
+    let manifest = std::fs::read_to_string(file.with_file_name("MANIFEST.tsv")).ok()?;
+    let name = file.file_name()?.to_str()?;
+    let mut lines = manifest.lines();
+    let header: Vec<&str> = lines.next()?.split('\t').collect();
+    let column = header.iter().position(|&c| c == "genus")?;
+    lines
+        .map(|l| l.split('\t').collect::<Vec<_>>())
+        .find(|row| row.first() == Some(&name))?
+        .get(column)?
+        .parse()
+        .ok()
+}
+
 #[test]
-fn every_shared_mesh_meshes_as_a_manifold_and_passes_the_morse_check_in_both_modes() {
+fn every_shared_mesh_meshes_with_its_topology_and_angles_and_passes_the_morse_check_in_both_modes()
+{
     let Some(files) = common::shared_meshes() else {
         return;
     };
@@ -140,6 +157,25 @@ fn every_shared_mesh_meshes_as_a_manifold_and_passes_the_morse_check_in_both_mod
             assert_eq!(2 * r.euler_volume, r.euler_boundary, "{what}");
             assert!(r.interior_vertices > 0, "{what}");
             assert_eq!(r.components, 1, "{what}: a part was lost or split off");
+            // Topology first: what the surface predicts (the one surface that crosses
+            // itself predicts nothing; its manifest genus must come out).
+            match &r.topology.expected {
+                Some(expected) => assert_eq!(&r.topology.found, expected, "{what}"),
+                None => {
+                    let genus = manifest_genus(&file).unwrap();
+                    let boundary: Vec<i64> = match side {
+                        Side::Inside => vec![2 - 2 * genus],
+                        Side::Outside => vec![2, 2 - 2 * genus],
+                    };
+                    assert_eq!(
+                        r.topology.found.components[0].boundary_eulers, boundary,
+                        "{what}"
+                    );
+                }
+            }
+            // Quality: at least 8° everywhere (the quality step's target is 10°).
+            assert!(r.min_dihedral_deg >= 8.0, "{what}: {}", r.min_dihedral_deg);
+            assert_eq!(r.tets_below_8_deg, 0, "{what}");
             if side == Side::Outside {
                 assert!(r.outer_vertices > 0, "{what}");
             }

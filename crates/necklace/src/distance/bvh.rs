@@ -293,13 +293,29 @@ fn bounds(points: impl Iterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
     (lo, hi)
 }
 
-/// Whether two triangles cross: an edge of one passes through the other (strictly
-/// inside the edge). Coplanar triangles never cross by this test.
+/// Whether two triangles cross: an edge of one passes through the interior of the
+/// other, away from its ends and the other's sides by a relative margin (so triangles
+/// that only touch, at a shared position or along a side, do not count). Coplanar
+/// triangles never cross by this test.
 pub(super) fn triangles_cross(t: &[[f64; 3]; 3], u: &[[f64; 3]; 3]) -> bool {
+    const MARGIN: f64 = 1e-9;
     let edge_through = |a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]| {
         (0..3).any(|i| {
             let (p, q) = (a[i], a[(i + 1) % 3]);
-            ray_triangle(p, sub(q, p), b[0], b[1], b[2]).is_some_and(|s| s > 0.0 && s < 1.0)
+            let d = sub(q, p);
+            let (e1, e2) = (sub(b[1], b[0]), sub(b[2], b[0]));
+            let pv = cross(d, e2);
+            let det = dot(e1, pv);
+            if det == 0.0 || !det.is_finite() {
+                return false;
+            }
+            let inv = 1.0 / det;
+            let tv = sub(p, b[0]);
+            let bu = dot(tv, pv) * inv;
+            let qv = cross(tv, e1);
+            let bv = dot(d, qv) * inv;
+            let s = dot(e2, qv) * inv;
+            bu > MARGIN && bv > MARGIN && bu + bv < 1.0 - MARGIN && s > MARGIN && s < 1.0 - MARGIN
         })
     };
     edge_through(t, u) || edge_through(u, t)

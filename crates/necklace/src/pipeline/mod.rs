@@ -349,6 +349,9 @@ pub struct NeckReport {
     pub sides: Vec<SideReport>,
     /// Whether the input faces pointed inward and were flipped before meshing.
     pub flipped: bool,
+    /// What the caller should know, one line each: each side's volume warnings (a
+    /// topology that differs from the surface's, a budget that bound, ...).
+    pub warnings: Vec<String>,
 }
 
 /// Stage timings per side and in total.
@@ -420,6 +423,7 @@ pub fn find_necks_with_progress(
         timings: NeckTimings::default(),
         sides: Vec::new(),
         flipped,
+        warnings: Vec::new(),
     };
     let sides = [
         (Side::Inside, options.handles),
@@ -441,6 +445,7 @@ pub fn find_necks_with_progress(
         let volume = volume_mesh(surface, side, &options.volume);
         progress.finish();
         let volume = volume?;
+        report.warnings.extend(volume.warnings.iter().cloned());
         progress.start(&format!("distance ({name})"), 0);
         let start = Instant::now();
         let field = distance_field(surface, &volume.mesh);

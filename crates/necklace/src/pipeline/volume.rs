@@ -31,7 +31,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, dot, norm, scale, sub};
 use crate::mesh::{MeshReport, SurfaceMesh, Topology};
 use crate::tet::{ComponentTopology, TetMesh, TetTopology, VertexKind};
-use crate::volume::{self, Domain, SizingFeature, StuffingOptions, StuffingStats};
+use crate::volume::{self, Domain, SharpFeatures, SizingFeature, StuffingOptions, StuffingStats};
 
 /// Which volume mesher to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -96,6 +96,9 @@ const MIN_SEPARATION_DEG: f64 = 120.0;
 /// edges not much longer than its thickness somewhere around it (a plate's rim, a
 /// wire's section).
 const FOLD_RATIO: f64 = 20.0;
+
+/// An edge whose two faces' normals differ by more than this is a crease.
+const CREASE_DEG: f64 = 40.0;
 
 /// Most shrinking steps of the inscribed ball at a vertex (each a closest-point query);
 /// a ball still shrinking after them is taken as not thin.
@@ -330,7 +333,8 @@ pub fn volume_mesh(
             for v in ring {
                 crossing[v as usize] = true;
             }
-            let thickness = thickness(surface, &distance, &crossing, THIN_FACTOR * h);
+            let topology = Topology::new(surface);
+            let thickness = thickness(surface, &topology, &distance, &crossing, THIN_FACTOR * h);
             let thin_vertices = thickness
                 .iter()
                 .filter(|t| t.iter().any(|x| x.is_finite()))
@@ -346,12 +350,16 @@ pub fn volume_mesh(
                 radius,
                 bounds: (lo, hi),
                 sizing: thin_part_sizing(surface, &thickness),
+                features: sharp_features(surface, &topology),
             };
             let stuffing = StuffingOptions {
                 h,
                 max_tets: options.max_tets,
                 min_dihedral_deg: options.min_dihedral_deg,
             };
+            if side == Side::Inside {
+                refuse_if_all_below_floor(&domain.sizing, &thickness, &stuffing)?;
+            }
             let (stuffed, found, rounds) = mesh_until_topology_matches(
                 surface,
                 &mut domain,
@@ -445,9 +453,11 @@ fn mesh_until_topology_matches(
         return Ok((stuffed, found, 1));
     };
     let mut best_distance = topology_distance(&found, expected);
+    // Where the budget already floors the spacing, finer cells are out of reach.
+    let floored = stuffed.stats.spacing_floor.is_some();
     let mut best = (stuffed, found);
     let mut rounds = 1;
-    while best_distance > 0 && rounds < MAX_ROUNDS {
+    while best_distance > 0 && rounds < MAX_ROUNDS && !floored {
         let refine = unresolved_features(surface, &best.0, spacing);
         if refine.is_empty() {
             break;
@@ -476,6 +486,29 @@ fn mesh_until_topology_matches(
         }
     }
     Ok((best.0, best.1, rounds))
+}
+
+/// Refuse at once when the budget floors the spacing above the thickness of every part
+/// of the solid: the mesh would be empty (or nearly), after all the work.
+fn refuse_if_all_below_floor(
+    sizing: &[SizingFeature],
+    thickness: &[[f64; 2]],
+    options: &StuffingOptions,
+) -> Result<()> {
+    let Some(floor) = volume::spacing_floor(sizing, options) else {
+        return Ok(());
+    };
+    let thickest = thickness.iter().map(|t| t[0]).fold(0.0, f64::max);
+    if thickest < floor {
+        return Err(Error::new(
+            ErrorKind::OverBudget,
+            format!(
+                "every part of the solid is thinner than {thickest:.3e}, but the budget of {} tets allows no cells below {floor:.3e}: raise it with --max-tets",
+                options.max_tets
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// How far one topology is from another: the differences in components, χ, boundary
@@ -675,12 +708,12 @@ fn nesting(surface: &SurfaceMesh, report: &MeshReport) -> Option<Vec<Option<usiz
 /// 1/[`FOLD_RATIO`] of the vertex's shortest edge (a fold, not a part).
 fn thickness(
     surface: &SurfaceMesh,
+    topology: &Topology,
     distance: &SurfaceDistance,
     skip: &[bool],
     limit: f64,
 ) -> Vec<[f64; 2]> {
     use rayon::prelude::*;
-    let topology = Topology::new(surface);
     let mut normals = vec![[0.0; 3]; surface.num_vertices()];
     for f in 0..surface.num_triangles() {
         let n = surface.face_normal_scaled(f);
@@ -853,6 +886,47 @@ fn thin_part_sizing(surface: &SurfaceMesh, thickness: &[[f64; 2]]) -> Vec<Sizing
     out
 }
 
+/// The surface's creases (edges whose two faces turn by more than [`CREASE_DEG`]) and
+/// corners (vertices where other than two creases meet: a crease's end, or three and
+/// more), for the mesher to snap its boundary onto.
+fn sharp_features(surface: &SurfaceMesh, topology: &Topology) -> SharpFeatures {
+    let min_cos = CREASE_DEG.to_radians().cos();
+    let normals: Vec<[f64; 3]> = (0..surface.num_triangles())
+        .map(|f| {
+            let n = surface.face_normal_scaled(f);
+            let l = norm(n);
+            if l > 0.0 {
+                scale(n, 1.0 / l)
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    let mut creases_at = vec![0u32; surface.num_vertices()];
+    let mut features = SharpFeatures::default();
+    for (e, &[a, b]) in topology.edges().iter().enumerate() {
+        let faces = topology.edge_faces(e);
+        if faces.len() != 2 {
+            continue;
+        }
+        let (n0, n1) = (normals[faces[0] as usize], normals[faces[1] as usize]);
+        if n0 == [0.0; 3] || n1 == [0.0; 3] || dot(n0, n1) >= min_cos {
+            continue;
+        }
+        features
+            .edges
+            .push([surface.positions[a as usize], surface.positions[b as usize]]);
+        creases_at[a as usize] += 1;
+        creases_at[b as usize] += 1;
+    }
+    for (v, &n) in creases_at.iter().enumerate() {
+        if n == 1 || n >= 3 {
+            features.corners.push(surface.positions[v]);
+        }
+    }
+    features
+}
+
 /// Largest distance of a surface-kind vertex of `mesh` to the input surface.
 fn hausdorff_to_surface(mesh: &TetMesh, distance: &SurfaceDistance) -> f64 {
     let surface_vertices: Vec<[f64; 3]> = mesh
@@ -896,6 +970,7 @@ struct SurfaceDomain<'a> {
     radius: f64,
     bounds: ([f64; 3], [f64; 3]),
     sizing: Vec<SizingFeature>,
+    features: SharpFeatures,
 }
 
 impl SurfaceDomain<'_> {
@@ -1008,6 +1083,10 @@ impl Domain for SurfaceDomain<'_> {
 
     fn sizing(&self) -> Vec<SizingFeature> {
         self.sizing.clone()
+    }
+
+    fn sharp_features(&self) -> SharpFeatures {
+        self.features.clone()
     }
 
     fn coarsest_spacing(&self, h: f64) -> f64 {

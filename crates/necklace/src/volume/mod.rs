@@ -22,7 +22,10 @@
 //! 4. `repair`: pinches below the lattice resolution (tets touching along an edge or at
 //!    a vertex only) are undone by dropping the smaller side; their places are returned
 //!    ([`VolumeMesh::pinches`]) so a caller can refine there and mesh again.
-//! 5. `quality`: where a graded transition or a guarded warp left a tet with a small
+//! 5. `features`: boundary vertices near the domain's sharp corners and creases
+//!    ([`Domain::sharp_features`]) are moved onto them, so small polyhedral parts keep
+//!    their volume.
+//! 6. `quality`: where a graded transition or a guarded warp left a tet with a small
 //!    dihedral angle, its vertices are moved (inside freely, on the boundary along it) to
 //!    raise the smallest angle of their stars to [`StuffingOptions::min_dihedral_deg`].
 //!
@@ -32,6 +35,7 @@
 
 mod background;
 mod csr;
+mod features;
 mod octree;
 mod quality;
 mod repair;
@@ -46,6 +50,7 @@ use serde::Serialize;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{norm, scale, sub};
 use crate::tet::{TetMesh, VertexKind};
+pub use features::SharpFeatures;
 use octree::{Cell, Key, Octree};
 pub use quality::QualityStats;
 pub use sizing::SizingFeature;
@@ -107,6 +112,12 @@ pub trait Domain: Sync {
 
     /// Which boundary a point on the zero set lies on.
     fn boundary_kind(&self, p: [f64; 3]) -> VertexKind;
+
+    /// Corners and creases of the boundary that boundary vertices should be snapped
+    /// onto (none by default).
+    fn sharp_features(&self) -> SharpFeatures {
+        SharpFeatures::default()
+    }
 
     /// A box `(min, max)` that contains the whole region.
     fn bounds(&self) -> ([f64; 3], [f64; 3]);
@@ -192,10 +203,13 @@ pub struct StuffingStats {
     pub exposed_vertices: usize,
     /// Boundary vertices enclosed by tets, now interior (see [`VolumeMesh::swallowed`]).
     pub swallowed_vertices: usize,
+    /// Boundary vertices moved onto a sharp corner or crease.
+    pub snapped_vertices: usize,
     /// What the quality step did.
     pub quality: QualityStats,
-    /// Seconds per step: octree, background, lattice values, stuffing, repair, quality.
-    pub seconds: [f64; 6],
+    /// Seconds per step: octree, background, lattice values, stuffing, repair, features,
+    /// quality (of the meshing that was kept).
+    pub seconds: [f64; 7],
 }
 
 /// A stuffed volume mesh and its statistics.
@@ -242,21 +256,14 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         .filter(|f| f.is_valid() && f.spacing < h)
         .collect();
 
-    let mut clock = Instant::now();
-    let mut seconds = [0.0; 6];
-    let mut lap = |i: usize| {
-        seconds[i] = clock.elapsed().as_secs_f64();
-        clock = Instant::now();
-    };
-
-    // 1. Octree, within the budget: the finest spacing the features may ask for is
-    // the floor that fits their estimate; a tree still over it doubles the floor.
-    let mut floor = budget_floor(&features, options.max_tets as f64, h);
-    let (grid, tree, features) = loop {
+    // 1–3. Octree, background lattice, stuffing, within the budget: the finest
+    // spacing the features may ask for is the floor that fits their estimate; a tree
+    // or a mesh still over the budget doubles the floor and starts again.
+    let mut floor = spacing_floor(&features, options);
+    let (lattice, features) = loop {
         let clamped = clamp_spacing(&features, floor);
-        let grid = Grid::new(lo, hi, h, &clamped)?;
-        match build_octree(domain, &grid, &clamped, options) {
-            Ok(tree) => break (grid, tree, clamped),
+        match stuff_lattice(domain, options, &clamped, lo, hi) {
+            Ok(lattice) => break (lattice, clamped),
             Err(e)
                 if e.kind() != ErrorKind::OverBudget
                     || floor.is_some_and(|f| f >= h)
@@ -270,39 +277,20 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             }
         }
     };
-    lap(0);
-
-    // 2. Background BCC tetrahedralisation.
-    let background = background::tetrahedralize(&tree.octree, &|c| tree.dead.contains(c));
-    let positions: Vec<[f64; 3]> = background.keys.iter().map(|&k| grid.point(k)).collect();
-    lap(1);
-
-    // Only signs matter at lattice vertices (cut points are found on the true function).
-    let values = lattice_values(domain, &grid, &tree, &background.keys, &positions);
-    lap(2);
-
-    // 3. Stuffing, with the paper's α on every edge.
-    let keys = &background.keys;
-    let alpha = |a: u32, b: u32| {
-        let (ka, kb) = (keys[a as usize], keys[b as usize]);
-        let axis_parallel = (0..3).filter(|&k| ka[k] != kb[k]).count() == 1;
-        if axis_parallel {
-            stuffing::ALPHA_LONG
-        } else {
-            stuffing::ALPHA_SHORT
-        }
+    let Lattice {
+        grid,
+        tree,
+        keys,
+        background_tets,
+        mut stuffed,
+        mut seconds,
+    } = lattice;
+    let keys = &keys;
+    let mut clock = Instant::now();
+    let mut lap = |i: usize| {
+        seconds[i] = clock.elapsed().as_secs_f64();
+        clock = Instant::now();
     };
-    let value = |p: [f64; 3]| domain.value(p);
-    let crossing = |a: [f64; 3], b: [f64; 3]| domain.crossing(a, b);
-    let mut stuffed = stuffing::stuff(
-        &value,
-        &crossing,
-        positions,
-        &values,
-        &alpha,
-        &background.tets,
-    );
-    lap(3);
 
     // 4. Pinches below the lattice resolution.
     let mut interior: Vec<bool> = stuffed.signs.iter().map(|&s| s < 0).collect();
@@ -325,13 +313,25 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     let swallowed = repair.buried.iter().map(site).collect();
     lap(4);
 
-    // 5. Quality: lift the smallest dihedral angles where transitions left them low.
+    // 5. Sharp features: boundary vertices onto the corners and creases.
     let exposed: HashSet<u32> = repair.exposed.iter().copied().collect();
+    let on_boundary: Vec<bool> = (0..stuffed.positions.len())
+        .map(|v| !interior[v] && !exposed.contains(&(v as u32)))
+        .collect();
+    let snapped = features::snap(
+        &mut stuffed.positions,
+        &stuffed.tets,
+        &on_boundary,
+        &domain.sharp_features(),
+    );
+    lap(5);
+
+    // 6. Quality: lift the smallest dihedral angles where transitions left them low.
     let mobility: Vec<quality::Mobility> = (0..stuffed.positions.len())
         .map(|v| {
             if interior[v] {
                 quality::Mobility::Free
-            } else if exposed.contains(&(v as u32)) {
+            } else if exposed.contains(&(v as u32)) || snapped[v] {
                 quality::Mobility::Fixed
             } else {
                 quality::Mobility::OnBoundary
@@ -345,7 +345,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         &|p| domain.project(p),
         options.min_dihedral_deg,
     );
-    lap(5);
+    lap(6);
 
     let mesh = compact(domain, &stuffed.positions, &stuffed.tets, &interior)?;
     if mesh.num_tets() == 0 {
@@ -369,8 +369,8 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             spacing_floor: floor,
             estimated_tets: tree.estimated_tets,
             octree_leaves: tree.leaves,
-            background_vertices: background.keys.len(),
-            background_tets: background.tets.len(),
+            background_vertices: keys.len(),
+            background_tets,
             warped_vertices: stuffed.warped,
             refused_warps: stuffed.refused_warps,
             cut_points: stuffed.cut_points,
@@ -378,10 +378,88 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             pinch_tets_removed: repair.removed_tets,
             exposed_vertices: repair.exposed.len(),
             swallowed_vertices: repair.buried.len(),
+            snapped_vertices: snapped.iter().filter(|&&x| x).count(),
             quality,
             seconds,
         },
     })
+}
+
+/// Steps 1 to 3 with the given features: the octree, its background lattice, the
+/// values at its vertices and the stuffed tets; `OverBudget` when the tree or the tets
+/// exceed [`StuffingOptions::max_tets`].
+fn stuff_lattice(
+    domain: &dyn Domain,
+    options: &StuffingOptions,
+    features: &[SizingFeature],
+    lo: [f64; 3],
+    hi: [f64; 3],
+) -> Result<Lattice> {
+    let mut clock = Instant::now();
+    let mut seconds = [0.0; 7];
+    let mut lap = |i: usize| {
+        seconds[i] = clock.elapsed().as_secs_f64();
+        clock = Instant::now();
+    };
+    let grid = Grid::new(lo, hi, options.h, features)?;
+    let tree = build_octree(domain, &grid, features, options)?;
+    lap(0);
+
+    let background = background::tetrahedralize(&tree.octree, &|c| tree.dead.contains(c));
+    let positions: Vec<[f64; 3]> = background.keys.iter().map(|&k| grid.point(k)).collect();
+    lap(1);
+
+    // Only signs matter at lattice vertices (cut points are found on the true function).
+    let values = lattice_values(domain, &grid, &tree, &background.keys, &positions);
+    lap(2);
+
+    // The paper's α on every edge.
+    let keys = &background.keys;
+    let alpha = |a: u32, b: u32| {
+        let (ka, kb) = (keys[a as usize], keys[b as usize]);
+        let axis_parallel = (0..3).filter(|&k| ka[k] != kb[k]).count() == 1;
+        if axis_parallel {
+            stuffing::ALPHA_LONG
+        } else {
+            stuffing::ALPHA_SHORT
+        }
+    };
+    let value = |p: [f64; 3]| domain.value(p);
+    let crossing = |a: [f64; 3], b: [f64; 3]| domain.crossing(a, b);
+    let stuffed = stuffing::stuff(
+        &value,
+        &crossing,
+        positions,
+        &values,
+        &alpha,
+        &background.tets,
+    );
+    lap(3);
+    if stuffed.tets.len() > options.max_tets {
+        return Err(over_budget(
+            stuffed.tets.len() as f64,
+            options.max_tets,
+            grid.finest_cell(&tree.octree),
+        ));
+    }
+    Ok(Lattice {
+        grid,
+        tree,
+        background_tets: background.tets.len(),
+        keys: background.keys,
+        stuffed,
+        seconds,
+    })
+}
+
+/// What steps 1 to 3 made (see [`stuff_lattice`]).
+struct Lattice {
+    grid: Grid,
+    tree: Tree,
+    keys: Vec<Key>,
+    background_tets: usize,
+    stuffed: stuffing::Stuffed,
+    seconds: [f64; 7],
 }
 
 /// The integer grid of the octree: one unit is half the smallest cell any feature
@@ -483,10 +561,18 @@ fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
         .sum()
 }
 
-/// The smallest spacing the features may ask for within `budget` tets (`None`: no
-/// floor needed), found by bisection on a log scale between their finest spacing and
-/// `h`.
-fn budget_floor(features: &[SizingFeature], budget: f64, h: f64) -> Option<f64> {
+/// The smallest spacing sizing features may ask for within the budget
+/// ([`StuffingOptions::max_tets`]; `None`: no floor needed), found by bisection on a
+/// log scale between their finest spacing and `h`. [`stuff_volume`] applies it; a
+/// caller may ask first, to see which parts the budget leaves unresolved.
+pub fn spacing_floor(features: &[SizingFeature], options: &StuffingOptions) -> Option<f64> {
+    let (budget, h) = (options.max_tets as f64, options.h);
+    let features: Vec<SizingFeature> = features
+        .iter()
+        .filter(|f| f.is_valid() && f.spacing < h)
+        .copied()
+        .collect();
+    let features = &features[..];
     if features.is_empty() || feature_estimate(features, 0.0) <= budget {
         return None;
     }
@@ -540,19 +626,18 @@ fn build_octree(
 ) -> Result<Tree> {
     let h = grid.h;
     let coarsest = domain.coarsest_spacing(h).max(h);
-    // Cells evaluated before the build gives up: a tree this large would be far over
-    // the budget whatever lies where.
-    let max_cells = (options.max_tets as f64 / TETS_PER_LEAF * 8.0) as usize + 1_000_000;
-    let mut cells_seen = 0usize;
-    let mut too_big = false;
+    // Every cell of a level becomes a leaf or splits into more, and about half of the
+    // leaves lie inside: past this many the tree is over the budget whatever follows.
+    let max_leaves = (options.max_tets as f64 / (0.5 * TETS_PER_LEAF)) as usize + 1;
+    let mut leaves_so_far = 0usize;
+    let mut too_big: Option<usize> = None;
     let mut dead: HashSet<Cell> = HashSet::default();
     let mut centre_values: HashMap<Key, f64> = HashMap::default();
     let mut lists = sizing::FeatureLists::new(features, grid.root, h);
     let to_point = |k: Key| grid.point(k);
     let octree = Octree::build(grid.root, |cells| {
-        cells_seen += cells.len();
-        if cells_seen > max_cells {
-            too_big = true;
+        if too_big.is_some() || leaves_so_far + cells.len() > max_leaves {
+            too_big = too_big.or(Some(leaves_so_far + cells.len()));
             return vec![false; cells.len()];
         }
         let centres: Vec<[f64; 3]> = cells.iter().map(|c| grid.point(c.center())).collect();
@@ -561,7 +646,7 @@ fn build_octree(
         let half_diagonal = 0.5 * 3f64.sqrt() * size;
         let values = domain.values_within(&centres, half_diagonal + coarsest);
         let thin = lists.level(cells, &to_point, grid.unit);
-        cells
+        let decisions: Vec<bool> = cells
             .iter()
             .zip(values)
             .zip(thin)
@@ -581,7 +666,9 @@ fn build_octree(
                 let wanted = domain.spacing_near(grid.point(cell.center()), h).max(h);
                 f.abs() < half_diagonal + wanted && size > wanted * (1.0 + 1e-9)
             })
-            .collect()
+            .collect();
+        leaves_so_far += decisions.iter().filter(|&&d| !d).count();
+        decisions
     });
     let leaves = octree.leaves();
     let live = leaves.iter().filter(|c| !dead.contains(c)).count();
@@ -593,8 +680,8 @@ fn build_octree(
             .min()
             .unwrap_or(grid.root.size),
     );
-    if too_big {
-        let estimate = TETS_PER_LEAF * max_cells as f64;
+    if let Some(cells) = too_big {
+        let estimate = 0.5 * TETS_PER_LEAF * cells as f64;
         return Err(over_budget(estimate, options.max_tets, finest));
     }
     if estimated_tets > options.max_tets {

@@ -276,7 +276,7 @@ fn boundary_normal(positions: &[[f64; 3]], tets: &[[u32; 4]], star: &[u32], v: u
 /// The quality of a tet: the sine of its smallest acute dihedral angle (an obtuse angle
 /// counts as 1: a tet with an angle near 180° has another near 0), and −1 for a tet
 /// that is flat or inverted. Monotone in the smallest dihedral angle below 90°.
-fn score(p: [[f64; 3]; 4]) -> f64 {
+pub(crate) fn score(p: [[f64; 3]; 4]) -> f64 {
     let [a, b, c, d] = p;
     if dot(sub(b, a), cross(sub(c, a), sub(d, a))) <= 0.0 {
         return -1.0;

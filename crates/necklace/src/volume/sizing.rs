@@ -181,3 +181,34 @@ impl<'a> FeatureLists<'a> {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_one_sided_feature_reaches_far_on_its_side_and_a_cell_on_the_other() {
+        let plate = SizingFeature {
+            corners: [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            spacing: 0.1,
+            reach: 0.5,
+            toward: [0.0, 0.0, -1.0],
+        };
+        // Below the triangle (its side) within 0.5; above within one cell (0.1).
+        assert!(plate.reaches([0.2, 0.2, -0.45], 0.0));
+        assert!(!plate.reaches([0.2, 0.2, -0.65], 0.0));
+        assert!(plate.reaches([0.2, 0.2, 0.09], 0.0));
+        assert!(!plate.reaches([0.2, 0.2, 0.2], 0.0));
+        // A cell straddling the plane counts as on the far side (its children may be).
+        assert!(plate.reaches([0.2, 0.2, 0.2], 0.3));
+        // All round without a direction.
+        let point = SizingFeature::point([0.0; 3], 0.1, 0.5);
+        assert!(point.reaches([0.0, 0.0, 0.45], 0.0) && point.reaches([0.0, 0.0, -0.45], 0.0));
+        assert!(point.is_valid());
+        assert!(!SizingFeature {
+            spacing: 0.0,
+            ..point
+        }
+        .is_valid());
+    }
+}

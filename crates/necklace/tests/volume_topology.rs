@@ -1,0 +1,297 @@
+//! The volume mesh has the surface's topology (issue 12): predictions from the surface,
+//! many small parts, needles and plates at the budget, refusals, the angle bound in
+//! refined thin parts.
+
+mod common;
+
+use common::Inside;
+
+use necklace::pipeline::{expected_topology, volume_mesh, Side, VolumeOptions};
+use necklace::shapes::{Shape, ShapeKind};
+use necklace::tet::{ComponentTopology, TetTopology};
+use necklace::volume::{stuff_volume, StuffingOptions};
+use necklace::{ErrorKind, SurfaceMesh};
+
+fn sphere(radius: f64, centre: [f64; 3], res: f64) -> SurfaceMesh {
+    let mut m = Shape::new(ShapeKind::Sphere)
+        .with("res", res)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    for p in &mut m.positions {
+        for k in 0..3 {
+            p[k] = centre[k] + radius * p[k];
+        }
+    }
+    m
+}
+
+fn union(parts: &[SurfaceMesh]) -> SurfaceMesh {
+    let mut out = SurfaceMesh {
+        positions: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for part in parts {
+        let n = out.positions.len() as u32;
+        out.positions.extend_from_slice(&part.positions);
+        out.triangles
+            .extend(part.triangles.iter().map(|t| t.map(|v| v + n)));
+    }
+    out
+}
+
+fn component(euler: i64, boundary: &[i64]) -> ComponentTopology {
+    ComponentTopology {
+        euler,
+        boundary_eulers: boundary.to_vec(),
+    }
+}
+
+/// A box `lo..hi` as 12 outward triangles.
+fn cuboid(lo: [f64; 3], hi: [f64; 3]) -> SurfaceMesh {
+    let corner = |c: usize| {
+        [
+            if c & 1 == 0 { lo[0] } else { hi[0] },
+            if c & 2 == 0 { lo[1] } else { hi[1] },
+            if c & 4 == 0 { lo[2] } else { hi[2] },
+        ]
+    };
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut triangles = Vec::new();
+    for q in quads {
+        triangles.push([q[0], q[1], q[2]]);
+        triangles.push([q[0], q[2], q[3]]);
+    }
+    let m = SurfaceMesh::new((0..8).map(corner).collect(), triangles).unwrap();
+    assert!(m.signed_volume() > 0.0);
+    m
+}
+
+/// `n` regular tetrahedra of edge `a` on a square grid, `3a` apart.
+fn tetrahedra(n: usize, a: f64) -> SurfaceMesh {
+    let s = a / (2.0 * 2f64.sqrt());
+    let corners = [
+        [1.0, 1.0, 1.0],
+        [1.0, -1.0, -1.0],
+        [-1.0, 1.0, -1.0],
+        [-1.0, -1.0, 1.0],
+    ];
+    let side = (n as f64).sqrt().ceil() as usize;
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for k in 0..n {
+        let offset = [
+            3.0 * a * (k % side) as f64,
+            3.0 * a * (k / side) as f64,
+            0.0,
+        ];
+        let first = positions.len() as u32;
+        for c in corners {
+            positions.push([0, 1, 2].map(|i| offset[i] + s * c[i]));
+        }
+        for f in [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]] {
+            triangles.push(f.map(|i| first + i));
+        }
+    }
+    let mut m = SurfaceMesh::new(positions, triangles).unwrap();
+    if m.signed_volume() < 0.0 {
+        m.flip_orientation();
+    }
+    m
+}
+
+#[test]
+fn the_surface_predicts_components_and_boundaries_from_genus_and_nesting() {
+    // A ball: inside one component bounded by a sphere; outside the shell between it
+    // and the outer sphere.
+    let ball = sphere(1.0, [0.0; 3], 16.0);
+    assert_eq!(
+        expected_topology(&ball, Side::Inside),
+        Some(TetTopology::new(vec![component(1, &[2])]))
+    );
+    assert_eq!(
+        expected_topology(&ball, Side::Outside),
+        Some(TetTopology::new(vec![component(2, &[2, 2])]))
+    );
+    // A torus: χ 0 inside, 1 outside.
+    let torus = Shape::new(ShapeKind::Torus).mesh().unwrap();
+    assert_eq!(
+        expected_topology(&torus, Side::Inside),
+        Some(TetTopology::new(vec![component(0, &[0])]))
+    );
+    assert_eq!(
+        expected_topology(&torus, Side::Outside),
+        Some(TetTopology::new(vec![component(1, &[2, 0])]))
+    );
+    // A hollow ball with a ball floating in its cavity: two solids (the shell with two
+    // boundaries, the inner ball); outside, the space beyond and the cavity (bounded by
+    // the cavity's wall and the inner ball).
+    let mut cavity = sphere(0.7, [0.0; 3], 16.0);
+    cavity.flip_orientation();
+    let nested = union(&[ball.clone(), cavity, sphere(0.3, [0.0; 3], 12.0)]);
+    assert_eq!(
+        expected_topology(&nested, Side::Inside),
+        Some(TetTopology::new(vec![
+            component(2, &[2, 2]),
+            component(1, &[2])
+        ]))
+    );
+    assert_eq!(
+        expected_topology(&nested, Side::Outside),
+        Some(TetTopology::new(vec![
+            component(2, &[2, 2]),
+            component(2, &[2, 2])
+        ]))
+    );
+    // Two balls that overlap cross each other: no prediction.
+    let overlapping = union(&[ball.clone(), sphere(1.0, [1.0, 0.0, 0.0], 16.0)]);
+    assert_eq!(expected_topology(&overlapping, Side::Inside), None);
+}
+
+#[test]
+fn a_hollow_ball_with_a_ball_inside_meshes_as_predicted_on_both_sides() {
+    let mut cavity = sphere(0.7, [0.0; 3], 24.0);
+    cavity.flip_orientation();
+    let nested = union(&[
+        sphere(1.0, [0.0; 3], 24.0),
+        cavity,
+        sphere(0.3, [0.0; 3], 16.0),
+    ]);
+    for side in [Side::Inside, Side::Outside] {
+        let v = volume_mesh(&nested, side, &VolumeOptions::default()).unwrap();
+        assert_eq!(v.topology.matches, Some(true), "{side:?}: {:?}", v.topology);
+        assert_eq!(v.topology.found.components.len(), 2);
+    }
+}
+
+#[test]
+fn four_hundred_separate_tetrahedra_are_four_hundred_components_with_their_volume() {
+    let surface = tetrahedra(400, 1.0);
+    let exact = surface.signed_volume();
+    let v = volume_mesh(&surface, Side::Inside, &VolumeOptions::default()).unwrap();
+    let r = v.report();
+    println!("{:?}", r.stuffing);
+    assert_eq!(r.topology.matches, Some(true), "{}", r.topology.found);
+    assert_eq!(r.components, 400);
+    assert!(r
+        .topology
+        .found
+        .components
+        .iter()
+        .all(|c| *c == component(1, &[2])));
+    assert!(
+        (r.volume - exact).abs() / exact < 0.02,
+        "volume {} against {exact}",
+        r.volume
+    );
+    assert!(r.min_dihedral_deg >= 8.0, "{}", r.min_dihedral_deg);
+}
+
+/// A valid mesh (positive tets, one component) or a one-line refusal that names the
+/// budget's option.
+fn valid_or_refused(surface: &SurfaceMesh, side: Side, options: &VolumeOptions) {
+    match volume_mesh(surface, side, options) {
+        Ok(v) => {
+            let m = &v.mesh;
+            assert!(m.num_tets() > 0);
+            assert!((0..m.num_tets()).all(|t| m.tet_volume(t) > 0.0));
+            assert!(m.num_tets() <= options.max_tets, "{} tets", m.num_tets());
+            // Whatever the budget left unresolved is said.
+            if v.topology.matches != Some(true) {
+                assert!(!v.warnings.is_empty(), "{side:?}: {:?}", v.topology);
+            }
+        }
+        Err(e) => {
+            let text = e.to_string();
+            assert!(!text.contains('\n'), "{text}");
+            assert!(
+                e.kind() == ErrorKind::OverBudget && text.contains("--max-tets"),
+                "{side:?}: {text}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_needle_and_a_thin_plate_give_a_valid_mesh_or_a_one_line_refusal() {
+    // A needle 10⁵ times longer than thick, and a plate 10⁻⁷ thick; a small budget
+    // keeps the test quick (the default one behaves the same, later).
+    let options = VolumeOptions {
+        max_tets: 2_000_000,
+        ..VolumeOptions::default()
+    };
+    let needle = cuboid([0.0; 3], [1.0, 1e-5, 1e-5]);
+    let plate = cuboid([0.0; 3], [1.0, 1.0, 1e-7]);
+    for surface in [&needle, &plate] {
+        for side in [Side::Inside, Side::Outside] {
+            valid_or_refused(surface, side, &options);
+        }
+    }
+    // The plate's solid is thinner than any cell the budget allows: refused at once.
+    let err = volume_mesh(&plate, Side::Inside, &options).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::OverBudget, "{err}");
+}
+
+#[test]
+fn a_mesh_over_the_budget_is_refused_with_its_estimate() {
+    let ball = sphere(1.0, [0.0; 3], 16.0);
+    let options = VolumeOptions {
+        max_tets: 1000,
+        ..VolumeOptions::default()
+    };
+    let err = volume_mesh(&ball, Side::Inside, &options).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::OverBudget);
+    let text = err.to_string();
+    assert!(
+        text.contains("tets") && text.contains("1000") && text.contains("--max-tets"),
+        "{text}"
+    );
+    // And the budget never lets a mesh through above it.
+    let options = VolumeOptions {
+        max_tets: 50_000,
+        ..VolumeOptions::default()
+    };
+    if let Ok(v) = volume_mesh(&ball, Side::Inside, &options) {
+        assert!(v.mesh.num_tets() <= 50_000);
+    }
+}
+
+#[test]
+fn an_empty_volume_mesh_is_an_error() {
+    // A ball far smaller than one cell, without sizing: no lattice vertex inside.
+    let tiny = Shape::new(ShapeKind::Sphere);
+    let err = stuff_volume(&Inside(tiny), &StuffingOptions::new(100.0)).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::InvalidMesh);
+    assert!(err.to_string().contains("empty"), "{err}");
+}
+
+#[test]
+fn refined_thin_parts_keep_dihedral_angles_above_eight_degrees() {
+    // Dumbbells with necks thinner than 2h (h = 0.049): graded cells along the neck.
+    for neck in [0.02, 0.03] {
+        let surface = Shape::from_name("dumbbell", &[("neck".into(), neck), ("res".into(), 256.0)])
+            .unwrap()
+            .mesh()
+            .unwrap();
+        for side in [Side::Inside, Side::Outside] {
+            let v = volume_mesh(&surface, side, &VolumeOptions::default()).unwrap();
+            let r = v.report();
+            assert!(r.finest_cell < r.h, "neck {neck}: not refined");
+            assert!(
+                r.min_dihedral_deg >= 8.0,
+                "neck {neck} {side:?}: {}",
+                r.min_dihedral_deg
+            );
+            assert_eq!(r.topology.matches, Some(true), "neck {neck} {side:?}");
+            // The histogram holds six angles per tet.
+            assert_eq!(r.dihedral_histogram.iter().sum::<usize>(), 6 * r.tets);
+        }
+    }
+}
