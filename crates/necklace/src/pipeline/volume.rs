@@ -8,15 +8,19 @@
 //!    the shell) its χ and the χ of each boundary surface, from the surface's
 //!    components, their genus and how they nest;
 //! 2. measures at every surface vertex the thickness of the solid and the width of the
-//!    gap in front of it (rays along the vertex normal, and the inscribed ball touching
-//!    there: the medial distance, which also sees thin parts that rays pass by) and asks
-//!    for cells a third of that wherever it is below three `h` ([`SizingFeature`]s over
-//!    the triangles, reaching across the part);
-//! 3. meshes (`volume::stuff_volume`), compares the mesh's topology with the
-//!    prediction, and where they differ refines where the mesh shows why — pinches, and
-//!    surface vertices the mesh's boundary does not come near — and meshes again, up to
-//!    [`MAX_ROUNDS`] times or until the tet budget stops it. A difference that remains
-//!    is reported in [`VolumeResult::warnings`] with both topologies, never dropped.
+//!    gap in front of it (a ray along the vertex normal, then the inscribed ball touching
+//!    there: the medial distance, which sees a wire's diameter where the ray sees a
+//!    chord) and asks for cells half of that wherever it is below `2h`
+//!    ([`SizingFeature`]s over the thin triangles, reaching into the part; no fixed
+//!    floor: the tet budget sets it). Folds of the surface and places where it crosses
+//!    itself are not parts, and are skipped;
+//! 3. finds the creases and corners for the mesher to snap its boundary onto;
+//! 4. meshes (`volume::stuff_volume`), compares the mesh's topology with the
+//!    prediction, and where they differ refines where the mesh shows why (pinches,
+//!    swallowed boundary vertices, and surface vertices the mesh's boundary does not
+//!    come near) and meshes again, up to [`MAX_ROUNDS`] times, keeping the mesh closest
+//!    to the prediction. A difference that remains, or a budget that bound, is reported
+//!    in [`VolumeResult::warnings`] with the figures, never dropped.
 //!
 //! Conventions: lengths in the surface's units; the outer sphere of a shell is centred
 //! at the bounding box's centre with radius `sphere_scale` × half its diagonal.
@@ -119,7 +123,7 @@ pub struct VolumeResult {
     pub mesher: Mesher,
     /// The stuffing mesher's counts of the last round (`None` for TetGen).
     pub stats: Option<StuffingStats>,
-    /// Surface vertices whose part or gap is thinner than `3h`.
+    /// Surface vertices whose part or gap is thinner than `2h`.
     pub thin_vertices: usize,
     /// The topology predicted from the surface and the one found.
     pub topology: TopologyCheck,
@@ -148,7 +152,7 @@ pub struct TopologyCheck {
 }
 
 /// The default spacing: 1/64 of the bounding-box diagonal. Parts and gaps thinner
-/// than `3h` are refined locally, so the rule needs no knowledge of the thinnest part.
+/// than `2h` are refined locally, so the rule needs no knowledge of the thinnest part.
 pub fn default_h(surface: &SurfaceMesh) -> f64 {
     surface.bbox_diagonal() / 64.0
 }
@@ -198,7 +202,7 @@ pub struct VolumeReport {
     pub h: f64,
     /// Smallest cell used (thin parts; stuffing).
     pub finest_cell: f64,
-    /// Surface vertices whose part or gap is thinner than `3h`.
+    /// Surface vertices whose part or gap is thinner than `2h`.
     pub thin_vertices: usize,
     /// The stuffing mesher's counts (last round; absent for TetGen).
     pub stuffing: Option<StuffingStats>,
@@ -304,7 +308,7 @@ pub fn volume_mesh(
         // A closed manifold that does not cross itself: the closest point tells the
         // sign (exact, and much cheaper near the surface than the winding number).
         distance.use_pseudonormal_sign(surface);
-        predict(surface, &distance, side)
+        predict(surface, side)
     } else {
         warnings.push(format!(
             "the surface crosses itself ({} pairs of triangles): the {} volume is the solid its winding number encloses, whose topology the genus does not predict",
@@ -577,12 +581,11 @@ pub fn expected_topology(surface: &SurfaceMesh, side: Side) -> Option<TetTopolog
     if !distance.self_intersections(&surface.triangles).is_empty() {
         return None;
     }
-    predict(surface, &distance, side)
+    predict(surface, side)
 }
 
 /// [`expected_topology`] of a surface known not to cross itself.
-fn predict(surface: &SurfaceMesh, distance: &SurfaceDistance, side: Side) -> Option<TetTopology> {
-    let _ = distance;
+fn predict(surface: &SurfaceMesh, side: Side) -> Option<TetTopology> {
     let report = MeshReport::new(surface);
     let comps = &report.component_details;
     if comps.is_empty() || comps.iter().any(|c| c.genus.is_none() || c.faces == 0) {

@@ -12,16 +12,20 @@
 //!    pass (|f(centre)| < half-diagonal + h; [`Domain::spacing_near`] may ask for less
 //!    detail on parts of the boundary), as small as the domain's [`SizingFeature`]s ask
 //!    where they reach (thin parts and gaps: no fixed floor), and coarser away from the
-//!    boundary. The tet count is estimated from the features before the tree is built
-//!    and from the tree before anything else; a run over [`StuffingOptions::max_tets`]
-//!    is refused with the figure.
+//!    boundary. The budget ([`StuffingOptions::max_tets`]) is held three times: the
+//!    features' estimate sets a floor on their spacing ([`spacing_floor`], reported in
+//!    [`StuffingStats::spacing_floor`]), a tree or a mesh still over it raises the floor
+//!    and starts again, and a run over it without thin parts to coarsen is refused
+//!    with the figure.
 //! 2. `background`: the octree's BCC tetrahedralisation (graded, conforming).
 //! 3. `stuffing`: domain values at the lattice vertices, cut points on sign-changing
 //!    edges, warping of vertices too close to a cut point (the paper's α everywhere), and
 //!    the stencils that fill each background tet with its inside part.
 //! 4. `repair`: pinches below the lattice resolution (tets touching along an edge or at
 //!    a vertex only) are undone by dropping the smaller side; their places are returned
-//!    ([`VolumeMesh::pinches`]) so a caller can refine there and mesh again.
+//!    ([`VolumeMesh::pinches`]) so a caller can refine there and mesh again (the
+//!    pipeline does, while the topology differs from the surface's). Boundary vertices
+//!    the tets closed round become interior ([`VolumeMesh::swallowed`]).
 //! 5. `features`: boundary vertices near the domain's sharp corners and creases
 //!    ([`Domain::sharp_features`]) are moved onto them, so small polyhedral parts keep
 //!    their volume.
@@ -229,8 +233,10 @@ pub struct VolumeMesh {
     pub swallowed: Vec<([f64; 3], f64)>,
 }
 
-/// Tets per octree leaf of a BCC lattice (each leaf owns three faces, four tets each).
-const TETS_PER_LEAF: f64 = 12.0;
+/// Tets per octree leaf: 12 on a uniform BCC lattice (each leaf owns three faces, four
+/// tets each), more where the lattice is graded (cones at transitions; 15 measured
+/// on the wire sphere's shell).
+const TETS_PER_LEAF: f64 = 15.0;
 
 /// Most halvings of `h` a sizing feature may ask for (the integer grid's resolution).
 const MAX_LEVELS: u32 = 30;
@@ -264,17 +270,17 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         let clamped = clamp_spacing(&features, floor);
         match stuff_lattice(domain, options, &clamped, lo, hi) {
             Ok(lattice) => break (lattice, clamped),
-            Err(e)
-                if e.kind() != ErrorKind::OverBudget
-                    || floor.is_some_and(|f| f >= h)
-                    || clamped.is_empty() =>
-            {
-                return Err(e)
-            }
-            Err(_) => {
+            Err(Failed::OverBudget(estimate, e)) => {
+                if floor.is_some_and(|f| f >= h) || clamped.is_empty() {
+                    return Err(e);
+                }
+                // Tets grow like the inverse square of the spacing along a surface:
+                // coarsen by the square root of the excess, at least by two.
+                let excess = estimate / options.max_tets as f64;
                 let finest = clamped.iter().map(|f| f.spacing).fold(h, f64::min);
-                floor = Some((2.0 * finest).min(h));
+                floor = Some((finest * excess.sqrt().max(2.0) * 1.1).min(h));
             }
+            Err(failed) => return Err(failed.error()),
         }
     };
     let Lattice {
@@ -346,7 +352,6 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         options.min_dihedral_deg,
     );
     lap(6);
-
     let mesh = compact(domain, &stuffed.positions, &stuffed.tets, &interior)?;
     if mesh.num_tets() == 0 {
         return Err(Error::new(
@@ -394,7 +399,7 @@ fn stuff_lattice(
     features: &[SizingFeature],
     lo: [f64; 3],
     hi: [f64; 3],
-) -> Result<Lattice> {
+) -> std::result::Result<Lattice, Failed> {
     let mut clock = Instant::now();
     let mut seconds = [0.0; 7];
     let mut lap = |i: usize| {
@@ -546,8 +551,9 @@ struct Tree {
 }
 
 /// The tets the features ask for, were no spacing finer than `floor`: the volume each
-/// refines divided by its cells' volume (about half of the cells near a boundary are
-/// inside).
+/// refines divided by its cells' volume. About half of those cells are inside, but the
+/// octree's grading around them adds about as many again, and the tree's own guard
+/// counts leaves (see `build_octree`), so the estimate counts all of them.
 fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
     features
         .iter()
@@ -556,7 +562,7 @@ fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
                 spacing: f.spacing.max(floor),
                 ..*f
             };
-            0.5 * TETS_PER_LEAF * clamped.region_volume() / clamped.spacing.powi(3)
+            TETS_PER_LEAF * clamped.region_volume() / clamped.spacing.powi(3)
         })
         .sum()
 }
@@ -606,11 +612,35 @@ fn clamp_spacing(features: &[SizingFeature], floor: Option<f64>) -> Vec<SizingFe
     }
 }
 
-fn over_budget(estimate: f64, budget: usize, finest: f64) -> Error {
-    Error::new(
-        ErrorKind::OverBudget,
-        format!(
-            "the volume mesh would have about {estimate:.2e} tets (smallest cells {finest:.2e}), over the budget of {budget} tets: raise it with --max-tets, or pass a larger --h"
+/// A meshing attempt that failed: over the budget (with the estimate that was), or for
+/// another reason.
+enum Failed {
+    OverBudget(f64, Error),
+    Other(Error),
+}
+
+impl From<Error> for Failed {
+    fn from(e: Error) -> Failed {
+        Failed::Other(e)
+    }
+}
+
+impl Failed {
+    fn error(self) -> Error {
+        match self {
+            Failed::OverBudget(_, e) | Failed::Other(e) => e,
+        }
+    }
+}
+
+fn over_budget(estimate: f64, budget: usize, finest: f64) -> Failed {
+    Failed::OverBudget(
+        estimate,
+        Error::new(
+            ErrorKind::OverBudget,
+            format!(
+                "the volume mesh would have about {estimate:.2e} tets (smallest cells {finest:.2e}), over the budget of {budget} tets: raise it with --max-tets, or pass a larger --h"
+            ),
         ),
     )
 }
@@ -623,7 +653,7 @@ fn build_octree(
     grid: &Grid,
     features: &[SizingFeature],
     options: &StuffingOptions,
-) -> Result<Tree> {
+) -> std::result::Result<Tree, Failed> {
     let h = grid.h;
     let coarsest = domain.coarsest_spacing(h).max(h);
     // Every cell of a level becomes a leaf or splits into more, and about half of the
@@ -671,8 +701,15 @@ fn build_octree(
         decisions
     });
     let leaves = octree.leaves();
-    let live = leaves.iter().filter(|c| !dead.contains(c)).count();
-    let estimated_tets = (TETS_PER_LEAF * live as f64) as usize;
+    // Leaves inside give all their tets, leaves the boundary may cross about half.
+    let (mut inside, mut crossed) = (0usize, 0usize);
+    for leaf in leaves.iter().filter(|c| !dead.contains(c)) {
+        match centre_values.get(&leaf.center()) {
+            Some(&f) if f < -0.5 * 3f64.sqrt() * grid.length(leaf.size) => inside += 1,
+            _ => crossed += 1,
+        }
+    }
+    let estimated_tets = (TETS_PER_LEAF * (inside as f64 + 0.5 * crossed as f64)) as usize;
     let finest = grid.length(
         leaves
             .iter()
