@@ -11,7 +11,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use necklace::morse::MorseOptions;
+use necklace::morse::{MorseOptions, Schedule};
 use necklace::output::OutputOptions;
 use necklace::pipeline::{self, Mesher, Side, VolumeOptions};
 use necklace::render::RenderOptions;
@@ -188,10 +188,26 @@ enum Command {
 /// The method's settings shared by `critical` and `loops`.
 #[derive(clap::Args)]
 struct MethodArgs {
-    /// Last smoothing step N (classification runs from step 10 to N).
+    /// Smoothing schedule: `scales` classifies over a geometric range of heat times
+    /// (from 2h to a quarter of the diagonal); `paper` takes --steps steps of --tau and
+    /// classifies from step 10 on, as the paper does.
+    #[arg(long, value_enum, default_value_t = ScheduleArg::Scales)]
+    schedule: ScheduleArg,
+    /// Scale space: classified levels.
+    #[arg(long, default_value_t = 32)]
+    levels: usize,
+    /// Scale space: smallest bulge ratio (lobe's field maximum / field at the saddle)
+    /// of a neck that cuts off a part.
+    #[arg(long, default_value_t = 1.5)]
+    min_bulge: f64,
+    /// Scale space: levels a saddle must live to be a neck.
+    #[arg(long, default_value_t = 3)]
+    min_levels: usize,
+    /// Paper schedule: last smoothing step N (classification runs from step 10 to N).
     #[arg(long, default_value_t = 20)]
     steps: usize,
-    /// Heat time step in units where the bounding box's longest side is 1.
+    /// Paper schedule: heat time step in units where the bounding box's longest side
+    /// is 1.
     #[arg(long, default_value_t = 0.01)]
     tau: f64,
     /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
@@ -214,11 +230,24 @@ impl MethodArgs {
 
     fn morse(&self) -> MorseOptions {
         MorseOptions {
+            schedule: match self.schedule {
+                ScheduleArg::Scales => Schedule::ScaleSpace,
+                ScheduleArg::Paper => Schedule::Paper,
+            },
+            levels: self.levels,
+            min_bulge: self.min_bulge,
+            min_levels: self.min_levels,
             steps: self.steps,
             tau: self.tau,
             ..MorseOptions::default()
         }
     }
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ScheduleArg {
+    Scales,
+    Paper,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]

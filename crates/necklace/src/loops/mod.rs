@@ -17,6 +17,7 @@
 //! a reason. Seeds are processed in parallel; the result does not depend on the thread
 //! count. Entry point: [`find_loops`].
 
+pub mod classes;
 pub mod cut;
 pub mod tighten;
 
@@ -27,7 +28,7 @@ use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, cross, dot, norm, scale, sub};
-use crate::mesh::{SurfaceMesh, Topology};
+use crate::mesh::{HomologyBasis, SurfaceMesh, Topology, Z2Basis};
 use crate::progress::{Progress, Silent};
 use cut::{closed_length, loop_around, plane_basis, plane_cut, Plane};
 use tighten::{tighten, SurfaceGeometry};
@@ -43,15 +44,33 @@ pub enum LoopKind {
     Tunnel,
 }
 
+/// What the saddle of a seed does to the volume (see `morse::roles`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Role {
+    /// It joins two lobes: its loop cuts off a part.
+    Separating,
+    /// It closes a cycle: its loop goes around a handle (inside) or tunnel (outside).
+    CycleClosing,
+}
+
 /// Where a loop starts: a selected 2-saddle.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct Seed {
     /// Saddle position (a point of the cutting plane).
     pub position: [f64; 3],
     /// Cutting-plane normal (need not be unit length, must be non-zero).
     pub normal: [f64; 3],
-    /// Steps the saddle survived under smoothing.
+    /// Steps (levels) the saddle survived under smoothing.
     pub persistence: usize,
+    /// Its role, when known. With [`LoopOptions::homology_selection`], cycle-closing
+    /// seeds are kept one per independent homology class.
+    pub role: Option<Role>,
+    /// Scale (length) at which the saddle appeared, and the first at which it was gone
+    /// (`None`: alive at the largest); 0 and `None` when unknown.
+    pub scales: (f64, Option<f64>),
+    /// Separating: how much fatter the lobe it cuts off is than the neck.
+    pub bulge: Option<f64>,
 }
 
 /// Options of [`find_loops`].
@@ -70,6 +89,10 @@ pub struct LoopOptions {
     pub merge_distance: f64,
     /// ... and whose lengths differ by less than this fraction are duplicates. Default 0.02.
     pub merge_length: f64,
+    /// Keep one cycle-closing loop per independent Z2 homology class of the surface,
+    /// the shortest first, and drop cycle-closing loops that separate it (their cycle
+    /// is filled again lower down: noise). Default true.
+    pub homology_selection: bool,
 }
 
 impl Default for LoopOptions {
@@ -81,6 +104,7 @@ impl Default for LoopOptions {
             max_length: 1.5,
             merge_distance: 0.01,
             merge_length: 0.02,
+            homology_selection: true,
         }
     }
 }
@@ -113,6 +137,23 @@ pub struct NeckLoop {
     pub persistence: usize,
     /// Seeds whose loops were duplicates of this one.
     pub duplicates: Vec<usize>,
+    /// Its saddle's role, when known.
+    pub role: Option<Role>,
+    /// Scale (length) at which its saddle appeared under smoothing.
+    pub birth_scale: f64,
+    /// Scale at which its saddle was gone (`None`: alive at the largest scale).
+    pub death_scale: Option<f64>,
+    /// Separating: how much fatter the lobe it cuts off is than the neck.
+    pub bulge: Option<f64>,
+    /// Its Z2 homology class on the surface: one character per basis cycle of a
+    /// tree–cotree basis (`2g` of them), `1` where it crosses that cycle an odd number
+    /// of times. All `0` exactly when it separates the surface.
+    pub homology: String,
+    /// Whether it separates the surface (its class is 0).
+    pub separating: bool,
+    /// Separating: the areas of the two sides it cuts its surface component into,
+    /// smaller first.
+    pub areas: Option<[f64; 2]>,
     /// Why it was kept, in words.
     pub reason: String,
     /// How tightening ended, and its geodesic diagnostics.
@@ -174,6 +215,21 @@ pub enum DropReason {
         length: f64,
         /// The limit.
         limit: f64,
+    },
+    /// A cycle-closing saddle whose loop separates the surface: the cycle it closed is
+    /// filled again lower down (noise next to a neck), not a handle or tunnel.
+    NotEssential {
+        /// Its length.
+        length: f64,
+    },
+    /// A cycle-closing saddle whose loop's homology class is a sum of the classes of
+    /// shorter kept loops: the same handle or tunnel seen again.
+    SameCycle {
+        /// Index of the kept loop with the same class, when the class is one loop's;
+        /// `None` when it is a sum of several.
+        of: Option<usize>,
+        /// Its own length.
+        length: f64,
     },
     /// A duplicate of a kept loop.
     Duplicate {
@@ -246,6 +302,7 @@ pub fn find_loops_with_progress(
     let start = Instant::now();
     let topology = Topology::new(surface);
     let geometry = SurfaceGeometry::new(surface, &topology);
+    let basis = HomologyBasis::new(surface, &topology);
     let preparation = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
@@ -253,7 +310,15 @@ pub fn find_loops_with_progress(
     let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
         .par_iter()
         .map(|seed| {
-            let outcome = loop_from_seed(surface, &topology, &geometry, seed, options);
+            let outcome = loop_from_seed(surface, &topology, &geometry, seed, options)
+                .map(|tightened| {
+                    let (crossed, _) =
+                        classes::crossings(surface, &topology, &tightened.surface_points);
+                    Candidate {
+                        class: basis.class_of_crossings(crossed),
+                        tightened,
+                    }
+                });
             progress.advance(1);
             outcome
         })
@@ -282,7 +347,26 @@ pub fn find_loops_with_progress(
             Ok(c) => candidates.push((i, c)),
         }
     }
-    let loops = select(surface, seeds, kind, candidates, options, &mut dropped);
+    let candidates = if options.homology_selection {
+        essential_cycles(seeds, kind, candidates, &mut dropped)
+    } else {
+        candidates
+    };
+    let mut loops = select(
+        surface,
+        seeds,
+        kind,
+        candidates,
+        options,
+        basis.len(),
+        &mut dropped,
+    );
+    for l in &mut loops {
+        if l.separating {
+            let (crossed, _) = classes::crossings(surface, &topology, &l.surface_points);
+            l.areas = classes::sides(surface, &topology, &l.surface_points, &crossed);
+        }
+    }
     dropped.sort_by_key(|d| d.seed);
     let selection = start.elapsed().as_secs_f64();
 
@@ -331,6 +415,58 @@ fn check_inputs(surface: &SurfaceMesh, seeds: &[Seed], options: &LoopOptions) ->
 /// A tightened loop before selection.
 struct Candidate {
     tightened: Tightened,
+    /// Its Z2 homology class.
+    class: Vec<u64>,
+}
+
+/// Keep one cycle-closing loop per independent homology class, shortest first; drop
+/// those that separate the surface. Other candidates pass through (a separating
+/// saddle's loop may go around a cycle too, e.g. a neck on a handle: it was selected
+/// for its bulge, not for its cycle).
+fn essential_cycles(
+    seeds: &[Seed],
+    kind: LoopKind,
+    candidates: Vec<(usize, Candidate)>,
+    dropped: &mut Vec<DroppedLoop>,
+) -> Vec<(usize, Candidate)> {
+    let (mut cycles, mut rest): (Vec<_>, Vec<_>) = candidates
+        .into_iter()
+        .partition(|(i, _)| seeds[*i].role == Some(Role::CycleClosing));
+    cycles.sort_by(|(i, a), (j, b)| {
+        a.tightened
+            .length
+            .total_cmp(&b.tightened.length)
+            .then(i.cmp(j))
+    });
+    let mut basis = Z2Basis::default();
+    let mut kept: Vec<(usize, Vec<u64>)> = Vec::new();
+    for (i, c) in cycles {
+        let length = c.tightened.length;
+        let reason = if c.class.iter().all(|w| *w == 0) {
+            Some(DropReason::NotEssential { length })
+        } else if basis.insert(&c.class) {
+            None
+        } else {
+            Some(DropReason::SameCycle {
+                of: kept.iter().find(|(_, k)| *k == c.class).map(|(j, _)| *j),
+                length,
+            })
+        };
+        match reason {
+            Some(reason) => dropped.push(DroppedLoop {
+                kind,
+                seed: i,
+                saddle: seeds[i].position,
+                persistence: seeds[i].persistence,
+                reason,
+            }),
+            None => {
+                kept.push((i, c.class.clone()));
+                rest.push((i, c));
+            }
+        }
+    }
+    rest
 }
 
 /// Cut, choose, tighten.
@@ -340,7 +476,7 @@ fn loop_from_seed(
     geometry: &SurfaceGeometry,
     seed: &Seed,
     options: &LoopOptions,
-) -> std::result::Result<Candidate, DropReason> {
+) -> std::result::Result<Tightened, DropReason> {
     let n = scale(seed.normal, 1.0 / norm(seed.normal));
     let mut normals = vec![n];
     let (u, v) = plane_basis(n);
@@ -385,7 +521,7 @@ fn loop_from_seed(
         TightenStatus::Converged | TightenStatus::Stalled if !t.simple => {
             Err(DropReason::NotSimple { length: t.length })
         }
-        TightenStatus::Converged | TightenStatus::Stalled => Ok(Candidate { tightened: t }),
+        TightenStatus::Converged | TightenStatus::Stalled => Ok(t),
         TightenStatus::Collapsed => Err(DropReason::Collapsed {
             initial_length: t.initial_length,
             length: t.length,
@@ -405,6 +541,7 @@ fn select(
     kind: LoopKind,
     mut candidates: Vec<(usize, Candidate)>,
     options: &LoopOptions,
+    basis_len: usize,
     dropped: &mut Vec<DroppedLoop>,
 ) -> Vec<NeckLoop> {
     candidates.sort_by(|(i, a), (j, b)| {
@@ -417,7 +554,7 @@ fn select(
     let diagonal = surface.bbox_diagonal();
     let mut loops: Vec<NeckLoop> = Vec::new();
     for (i, c) in candidates {
-        let t = c.tightened;
+        let Candidate { tightened: t, class, .. } = c;
         let center = centroid(&t.points);
         let duplicate_of = loops.iter().position(|l| {
             norm(sub(l.center, center)) <= options.merge_distance * diagonal
@@ -455,6 +592,13 @@ fn select(
             seed: i,
             persistence: seed.persistence,
             duplicates: Vec::new(),
+            role: seed.role,
+            birth_scale: seed.scales.0,
+            death_scale: seed.scales.1,
+            bulge: seed.bulge,
+            separating: class.iter().all(|w| *w == 0),
+            homology: class_string(&class, basis_len),
+            areas: None,
             reason,
             tightening: TighteningReport {
                 status: t.status,
@@ -471,6 +615,13 @@ fn select(
         });
     }
     loops
+}
+
+/// A class as one `0`/`1` character per basis cycle.
+fn class_string(class: &[u64], len: usize) -> String {
+    (0..len)
+        .map(|g| if class[g / 64] >> (g % 64) & 1 == 1 { '1' } else { '0' })
+        .collect()
 }
 
 /// Length-weighted centroid of a closed polyline (each segment counts at its midpoint).

@@ -5,7 +5,8 @@
 //! from outside for an outward-oriented mesh). Nothing is precomputed; topology is built
 //! on demand by [`Topology::new`] (edges and their faces, vertex-to-face adjacency,
 //! components) and summarised by [`MeshReport::new`], which is what `necklace info`
-//! prints.
+//! prints. [`HomologyBasis::new`] gives a Z2 homology basis (tree–cotree) to name the
+//! class of a closed curve on the surface.
 //!
 //! Conventions:
 //! - An *edge* is an unordered vertex pair used by at least one triangle; a *boundary
@@ -20,9 +21,11 @@
 //!   only for manifold, oriented components.
 //! - The signed volume (divergence theorem) is positive for an outward-oriented closed mesh.
 
+mod homology;
 mod report;
 mod topology;
 
+pub use homology::{z2_rank, HomologyBasis, Z2Basis};
 pub use report::{ComponentReport, MeshReport};
 pub use topology::Topology;
 pub(crate) use topology::{find, union};

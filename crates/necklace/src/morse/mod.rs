@@ -1,5 +1,5 @@
 //! The smoothed distance field and its critical points: which 2-saddles mark necks
-//! (paper sections 3 and 4.1–4.2).
+//! (paper sections 3 and 4.1–4.2, judged across scales as in issue 13).
 //!
 //! Input: a [`TetMesh`] whose vertex kinds say which vertices are on the surface and on
 //! the outer sphere, and a field with one value per vertex (the pipeline passes the
@@ -7,33 +7,50 @@
 //! sphere). Every non-interior vertex is a Dirichlet vertex and keeps its value.
 //! [`analyze`] then runs the method:
 //! 1. assemble the cotangent stiffness `L` and lumped mass `M` ([`laplacian`]);
-//! 2. take `N` implicit heat steps `(M + τL) F' = M F` ([`smoothing`]), `τ` given in
-//!    units where the longest side of the surface's bounding box is 1 (the paper rescales
-//!    the mesh to a unit box). When every Dirichlet value is 0 (inside), the map is
-//!    linear, so `F` is rescaled to `max |F| = 1` after each step (thin parts decay by
-//!    up to 1e-47 over 50 steps); with non-zero boundary values (outside) it is not;
-//! 3. from step `initial_steps` on, classify every interior vertex by its link
-//!    ([`critical`]), check the Morse sum against the mesh's topology, and track the
-//!    critical points from step to step ([`tracking`]);
-//! 4. keep the 2-saddles alive at step `N` that survived `min_persistence` steps and
-//!    whose fitted Hessian has signature (−, −, +) ([`hessian`]); the eigenvector of the
-//!    positive eigenvalue is the cutting-plane normal, the fitted quadratic's stationary
-//!    point the saddle's position. Saddles closer than the matching radius are one neck
-//!    (keep the most persistent). Every 2-saddle alive at `N` that is not kept is
-//!    listed with the reason.
+//! 2. take implicit heat steps `(M + τ_k L) F' = M F` ([`smoothing`]) on one of two
+//!    [`Schedule`]s:
+//!    - **scale space** (default): heat times `t_k = s_k²` on a geometric sequence of
+//!      scales `s_k` (lengths, the input's units) from `min_scale` (the pipeline passes
+//!      twice the lattice spacing) to `max_scale` × the surface's bounding-box diagonal,
+//!      `levels` of them, every one classified; step `k` takes `τ_k = t_k − t_{k−1}`;
+//!    - **paper**: `steps` steps of one `τ` given in units where the longest side of the
+//!      surface's bounding box is 1 (the paper rescales the mesh to a unit box),
+//!      classified from step `initial_steps` on.
+//!
+//!    When every Dirichlet value is 0 (inside), the map is linear, so `F` is rescaled
+//!    to `max |F| = 1` after each step (thin parts decay by up to 1e-47); with non-zero
+//!    boundary values (outside) it is not;
+//! 3. at every classified level, classify every interior vertex by its link
+//!    ([`critical`]), check the Morse sum against the mesh's topology, track the
+//!    critical points from level to level ([`tracking`]), give every 2-saddle its
+//!    topological role by a superlevel sweep ([`roles`]: separating with a bulge ratio,
+//!    or cycle-closing) and fit its Hessian ([`hessian`]);
+//! 4. select. Scale space: a 2-saddle track is a neck candidate when it lives at least
+//!    `min_levels` levels, its Hessian has signature (−, −, +) at some level, and it is
+//!    cycle-closing at such a level (then that level is its *representative*: the
+//!    first), or separating with a bulge ratio of at least `min_bulge` (the level of the
+//!    largest ratio). Separating tracks that cut off the same lobe (the same maximum
+//!    track) are one neck: the largest bulge is kept. Paper: the 2-saddles alive at the
+//!    last step that survived `min_persistence` steps and pass the Hessian test. In
+//!    both, saddles closer than the matching radius are one neck (keep the most
+//!    persistent), and every 2-saddle track not kept is listed with the reason. Which
+//!    cycle-closing candidates are essential (one per independent cycle) is decided on
+//!    the surface, by the loops' homology classes (`loops`).
 //!
 //! Conventions: `L` is positive semidefinite (`l = −Δf`), `M` gives a quarter of each
-//! tet's volume to each of its vertices; lengths in the mesh's units; steps are counted
-//! from 1 (step `k` = the field after `k` heat steps).
+//! tet's volume to each of its vertices; lengths in the mesh's units; scales are `√t`;
+//! steps and levels are counted from 1 (step `k` = the field after `k` heat steps).
 
 pub mod critical;
 pub mod hessian;
 pub mod laplacian;
+pub mod roles;
 pub mod smoothing;
 pub mod tracking;
 
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
@@ -46,22 +63,50 @@ pub use critical::{
 };
 pub use hessian::{hessian_at, Hessian};
 pub use laplacian::{cotangent_stiffness, lumped_mass, SparseMatrix};
+pub use roles::{RoleAt, SaddleRole, Sweep};
 pub use smoothing::{implicit_step, HeatSolver, SolverOptions, StepReport};
 pub use tracking::{CriticalPoint, StepEvents, Track, Tracker};
+
+/// Which heat times to classify at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Schedule {
+    /// A geometric sequence of scales from `min_scale` to `max_scale` (default).
+    ScaleSpace,
+    /// The paper's fixed `τ`, `steps` steps, classified from `initial_steps` on.
+    Paper,
+}
 
 /// Options of [`analyze`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MorseOptions {
-    /// Heat time step `τ` in units where the surface's bounding box has longest side 1
-    /// (default 0.01, the paper's `λh`).
+    /// Which heat times to classify at (default [`Schedule::ScaleSpace`]).
+    pub schedule: Schedule,
+    /// Scale space: classified levels (default 32).
+    pub levels: usize,
+    /// Scale space: the smallest scale `√t`, in mesh units (default `None`: twice the
+    /// median edge length of the mesh; the pipeline passes twice the lattice spacing).
+    pub min_scale: Option<f64>,
+    /// Scale space: the largest scale, as a fraction of the surface's bounding-box
+    /// diagonal (default 0.25).
+    pub max_scale: f64,
+    /// Scale space: levels a 2-saddle track must live to be a neck (default 3: about
+    /// 1.2× in scale at the default 32 levels over 8×).
+    pub min_levels: usize,
+    /// Scale space: smallest bulge ratio of a separating neck: the unsmoothed distance
+    /// (inscribed radius) near the lobe's maximum over the one near the saddle, at one
+    /// level (default 1.5; a uniform tube's noise stays below 1.2).
+    pub min_bulge: f64,
+    /// Paper: heat time step `τ` in units where the surface's bounding box has longest
+    /// side 1 (default 0.01, the paper's `λh`).
     pub tau: f64,
-    /// Heat steps before the first classification (default 10, the paper's initial
-    /// smoothing).
+    /// Paper: heat steps before the first classification (default 10, the paper's
+    /// initial smoothing).
     pub initial_steps: usize,
-    /// Last step `N` (default 20, the paper's "sm = 20").
+    /// Paper: last step `N` (default 20, the paper's "sm = 20").
     pub steps: usize,
-    /// Steps a 2-saddle must have survived at step `N` to be selected (default 5;
-    /// capped at `N − initial_steps`, so a run with `N = initial_steps` keeps every
+    /// Paper: steps a 2-saddle must have survived at step `N` to be selected (default
+    /// 5; capped at `N − initial_steps`, so a run with `N = initial_steps` keeps every
     /// 2-saddle that passes the Hessian test).
     pub min_persistence: usize,
     /// Matching radius of the tracking, in multiples of the mean edge length at the
@@ -74,6 +119,12 @@ pub struct MorseOptions {
 impl Default for MorseOptions {
     fn default() -> Self {
         MorseOptions {
+            schedule: Schedule::ScaleSpace,
+            levels: 32,
+            min_scale: None,
+            max_scale: 0.25,
+            min_levels: 3,
+            min_bulge: 1.5,
             tau: 0.01,
             initial_steps: 10,
             steps: 20,
@@ -84,11 +135,13 @@ impl Default for MorseOptions {
     }
 }
 
-/// One classified step.
+/// One classified step (a level of the scale space).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StepSummary {
-    /// Heat steps taken.
+    /// Heat steps taken (the level, counted from 1).
     pub step: usize,
+    /// Its scale `√t`, mesh units (`t` = the heat time summed over the steps).
+    pub scale: f64,
     /// Minima (none expected: the boundary comes first).
     pub minima: usize,
     /// Maxima.
@@ -97,6 +150,10 @@ pub struct StepSummary {
     pub saddles1: usize,
     /// 2-saddles.
     pub saddles2: usize,
+    /// 2-saddles that join two lobes.
+    pub separating: usize,
+    /// 2-saddles that close a cycle.
+    pub cycle_closing: usize,
     /// Degenerate (monkey) saddles.
     pub monkeys: usize,
     /// Σ over interior vertices of `1 − χ(lower link)`.
@@ -112,41 +169,70 @@ pub struct StepSummary {
 /// A selected 2-saddle.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Saddle {
-    /// Its vertex at step `N`.
+    /// Its vertex at its representative step.
     pub vertex: u32,
     /// The stationary point of the fitted quadratic (one Newton step from the vertex),
     /// or the vertex position when that step is longer than the matching radius.
     pub position: [f64; 3],
     /// The vertex position.
     pub vertex_position: [f64; 3],
-    /// The smoothed field there at step `N`.
+    /// The smoothed field there at its representative step.
     pub value: f64,
+    /// Its representative step: the one its position, normal and role are read at
+    /// (step `N` on the paper's schedule).
+    pub step: usize,
+    /// That step's scale `√t`.
+    pub scale: f64,
     /// Step it was first seen.
     pub born: usize,
-    /// Steps survived up to `N`.
+    /// Steps survived after the first (up to `N` on the paper's schedule; its whole
+    /// life on the scale space).
     pub persistence: usize,
+    /// Scale at which it appeared.
+    pub birth_scale: f64,
+    /// Scale of the first level it is no longer seen at (`None`: alive at the largest).
+    pub death_scale: Option<f64>,
+    /// What it does to the superlevel sets at its representative step.
+    pub role: SaddleRole,
+    /// Separating: the largest bulge ratio over its life (`None` for cycle-closing, or
+    /// when the lobe is the outer sphere's).
+    pub bulge: Option<f64>,
+    /// Separating: the track of the maximum of the lobe it cuts off.
+    pub lobe: Option<usize>,
     /// The fitted Hessian.
     pub hessian: Hessian,
     /// Cutting-plane normal: the eigenvector of the positive eigenvalue.
     pub normal: [f64; 3],
 }
 
-/// Why a 2-saddle alive at step `N` was not selected.
+/// Why a 2-saddle track was not selected.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "reason")]
 pub enum RejectReason {
-    /// It survived fewer than `min_persistence` steps.
+    /// It survived fewer than `min_persistence` steps (`min_levels` levels).
     ShortLived {
         /// Steps survived.
         persistence: usize,
     },
-    /// The fitted Hessian's signature is not (−, −, +).
+    /// The fitted Hessian's signature is not (−, −, +) (at any level of its life).
     HessianSignature {
         /// Its eigenvalues, ascending.
         eigenvalues: [f64; 3],
     },
     /// No quadratic could be fitted (too few neighbours).
     NoFit,
+    /// Separating, but the lobe it cuts off is not fatter than the neck by
+    /// `min_bulge`: a bump on a tube, not a neck.
+    LowBulge {
+        /// Its largest bulge ratio.
+        bulge: f64,
+    },
+    /// Separating, and another selected 2-saddle cuts off the same lobe with a larger
+    /// bulge ratio.
+    SameLobe {
+        /// Vertex of the 2-saddle kept.
+        of: u32,
+    },
     /// Another selected 2-saddle lies within the matching radius: one neck seen at
     /// several vertices (a lattice splits a smooth saddle into a cluster of discrete
     /// critical points). The one kept is the more persistent, then the one whose
@@ -157,15 +243,19 @@ pub enum RejectReason {
     },
 }
 
-/// A 2-saddle alive at step `N` that was not selected.
+/// A 2-saddle track that was not selected.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RejectedSaddle {
-    /// Its vertex at step `N`.
+    /// Its vertex (at its last step, or its representative one).
     pub vertex: u32,
     /// Its position.
     pub position: [f64; 3],
     /// Step first seen.
     pub born: usize,
+    /// Scale at which it appeared.
+    pub birth_scale: f64,
+    /// Scale of the first level it is no longer seen at (`None`: alive at the largest).
+    pub death_scale: Option<f64>,
     /// Why.
     #[serde(flatten)]
     pub reason: RejectReason,
@@ -180,31 +270,36 @@ pub struct MorseTimings {
     pub smoothing: f64,
     /// All classifications.
     pub classification: f64,
-    /// Tracking and Hessian fits.
+    /// Tracking, roles and Hessian fits.
     pub selection: f64,
 }
 
 /// Everything [`analyze`] found.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MorseResult {
+    /// The schedule run.
+    pub schedule: Schedule,
     /// Unknowns of the heat system (interior vertices).
     pub unknowns: usize,
-    /// `τ` in mesh units (length²).
+    /// `τ` in mesh units (length²) on the paper's schedule; the last step's on the
+    /// scale space.
     pub tau: f64,
     /// Whether the field was rescaled after each step (all boundary values 0).
     pub rescaled: bool,
     /// The solver's report for every heat step (`solver[k]` is step `k + 1`).
     pub solver: Vec<StepReport>,
-    /// One summary per classified step, `initial_steps..=N`.
+    /// One summary per classified step.
     pub steps: Vec<StepSummary>,
     /// The selected 2-saddles, most persistent first, then by vertex.
     pub saddles: Vec<Saddle>,
-    /// 2-saddles alive at step `N` that were not selected, and why.
+    /// 2-saddle tracks that were not selected, and why (paper: those alive at `N`).
     pub rejected: Vec<RejectedSaddle>,
-    /// Every track of the run (those `alive` are the critical points at step `N`).
+    /// Every 2-saddle track of the run with its scale interval: the barcode.
+    pub bars: Vec<Bar>,
+    /// Every track of the run (those `alive` are the critical points at the last step).
     #[serde(skip)]
     pub tracks: Vec<Track>,
-    /// The field at step `N` (rescaled when `rescaled`).
+    /// The field at the last step (rescaled when `rescaled`).
     #[serde(skip)]
     pub field: Vec<f64>,
     /// The mesh's Morse sum and the Euler characteristics it comes from.
@@ -213,11 +308,51 @@ pub struct MorseResult {
     pub timings: MorseTimings,
 }
 
+/// One 2-saddle track over scale.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Bar {
+    /// Scale at which it appeared.
+    pub birth_scale: f64,
+    /// Scale of the first level it is no longer seen at (`None`: alive at the largest).
+    pub death_scale: Option<f64>,
+    /// Whether it was cycle-closing at any level of its life.
+    pub cycle_closing: bool,
+    /// Its vertex when last seen.
+    pub vertex: u32,
+    /// Whether it was selected.
+    pub selected: bool,
+}
+
 impl MorseResult {
     /// The classified steps whose Morse sum is not what the topology says.
     pub fn morse_failures(&self) -> impl Iterator<Item = &StepSummary> {
         self.steps.iter().filter(|s| !s.morse_ok)
     }
+}
+
+/// One heat step of a schedule.
+#[derive(Debug, Clone, Copy)]
+struct PlannedStep {
+    /// `τ` in mesh units.
+    tau: f64,
+    /// Scale `√t` after it.
+    scale: f64,
+    /// Whether to classify after it.
+    classify: bool,
+}
+
+/// A 2-saddle seen at one level, with what is needed to select it.
+#[derive(Debug, Clone, Copy)]
+struct Observation {
+    step: usize,
+    vertex: u32,
+    position: [f64; 3],
+    radius: f64,
+    value: f64,
+    role: RoleAt,
+    /// The track of the younger maximum (separating).
+    lobe: Option<usize>,
+    hessian: Option<Hessian>,
 }
 
 /// Smooth `field` on `mesh`, classify and track its critical points, and select the
@@ -235,7 +370,7 @@ pub fn analyze_with_progress(
 ) -> Result<MorseResult> {
     check_inputs(mesh, field, options)?;
 
-    // 1. Operators, the reduced heat system and the links (assembled once).
+    // 1. Operators, the reduced heat system, the links and the adjacency (once).
     let start = Instant::now();
     let stiffness = cotangent_stiffness(mesh);
     let mass = lumped_mass(mesh);
@@ -243,25 +378,29 @@ pub fn analyze_with_progress(
         .map(|v| mesh.kinds[v] != VertexKind::Interior || mass[v] <= 0.0)
         .collect();
     let rescaled = (0..mesh.num_vertices()).all(|v| !fixed[v] || field[v] == 0.0);
-    let unit = longest_side(mesh);
-    let tau = options.tau * unit * unit;
-    let mut solver = HeatSolver::new(&stiffness, &mass, &fixed, field, tau, options.solver);
+    let plan = plan_steps(mesh, options);
+    let first_tau = plan.first().map_or(0.0, |p| p.tau);
+    let mut solver = HeatSolver::new(&stiffness, &mass, &fixed, field, first_tau, options.solver);
     let links = Links::new(mesh)?;
+    let sweep = Sweep::new(mesh);
     let morse_expected = expected_morse_sum(mesh);
     let mut timings = MorseTimings {
         assembly: start.elapsed().as_secs_f64(),
         ..MorseTimings::default()
     };
 
-    // 2–3. Heat steps; from `initial_steps` on, classify and track.
+    // 2–3. Heat steps; at every classified one, classify, track, give roles, fit.
     let mut f = field.to_vec();
-    let mut reports = Vec::with_capacity(options.steps);
+    let mut reports = Vec::with_capacity(plan.len());
     let mut steps = Vec::new();
     let mut tracker = Tracker::new();
-    progress.start("smoothing and critical points", options.steps as u64);
-    for step in 1..=options.steps {
+    let mut observations: Vec<Vec<Observation>> = Vec::new();
+    progress.start("smoothing and critical points", plan.len() as u64);
+    for (k, planned) in plan.iter().enumerate() {
+        let step = k + 1;
         progress.advance(1);
         let start = Instant::now();
+        solver.set_tau(planned.tau);
         let (next, report) = solver.step(&f);
         f = next;
         if rescaled {
@@ -269,7 +408,7 @@ pub fn analyze_with_progress(
         }
         reports.push(report);
         timings.smoothing += start.elapsed().as_secs_f64();
-        if step < options.initial_steps {
+        if !planned.classify {
             continue;
         }
         let start = Instant::now();
@@ -278,39 +417,457 @@ pub fn analyze_with_progress(
         let start = Instant::now();
         let critical = critical_points(mesh, &classification, options.track_radius);
         let events = tracker.advance(step, &critical);
-        steps.push(summarize(step, &classification, morse_expected.sum, events));
+        let roles = sweep.roles(&f, &classification, field);
+        observe(
+            mesh,
+            &f,
+            step,
+            &critical,
+            &roles,
+            &tracker,
+            &mut observations,
+        );
+        steps.push(summarize(
+            step,
+            planned.scale,
+            &classification,
+            &roles,
+            morse_expected.sum,
+            events,
+        ));
         timings.selection += start.elapsed().as_secs_f64();
     }
-
     progress.finish();
 
-    // 4. Select the persistent 2-saddles with the right Hessian.
+    // 4. Select.
     let start = Instant::now();
-    let min_persistence = options
-        .min_persistence
-        .min(options.steps - options.initial_steps);
-    let (saddles, rejected) = select(
-        mesh,
-        &f,
-        &tracker.tracks,
-        min_persistence,
-        options.track_radius,
-    );
+    let scale_of = |step: usize| plan.get(step.wrapping_sub(1)).map(|p| p.scale);
+    let (saddles, rejected) = match options.schedule {
+        Schedule::ScaleSpace => select_over_scales(
+            mesh,
+            &tracker.tracks,
+            &observations,
+            options,
+            &scale_of,
+        ),
+        Schedule::Paper => {
+            let min_persistence = options
+                .min_persistence
+                .min(options.steps - options.initial_steps);
+            select_at_last_step(
+                mesh,
+                &f,
+                &tracker.tracks,
+                &observations,
+                min_persistence,
+                options.track_radius,
+                &scale_of,
+            )
+        }
+    };
+    let bars = barcode(&tracker.tracks, &observations, &saddles, &scale_of);
     timings.selection += start.elapsed().as_secs_f64();
 
     Ok(MorseResult {
+        schedule: options.schedule,
         unknowns: solver.unknowns(),
-        tau,
+        tau: solver.tau(),
         rescaled,
         solver: reports,
         steps,
         saddles,
         rejected,
+        bars,
         tracks: tracker.tracks,
         field: f,
         morse_expected,
         timings,
     })
+}
+
+/// The heat steps of the schedule (see the module doc).
+fn plan_steps(mesh: &TetMesh, options: &MorseOptions) -> Vec<PlannedStep> {
+    match options.schedule {
+        Schedule::Paper => {
+            let unit = longest_side(mesh);
+            let tau = options.tau * unit * unit;
+            (1..=options.steps)
+                .map(|step| PlannedStep {
+                    tau,
+                    scale: (step as f64 * tau).sqrt(),
+                    classify: step >= options.initial_steps,
+                })
+                .collect()
+        }
+        Schedule::ScaleSpace => {
+            let largest = options.max_scale * diagonal(mesh);
+            let mut smallest = options
+                .min_scale
+                .unwrap_or_else(|| 2.0 * median_edge_length(mesh));
+            if !(smallest > 0.0 && smallest < largest) {
+                smallest = largest / 8.0;
+            }
+            let levels = options.levels;
+            let mut previous_t = 0.0;
+            (0..levels)
+                .map(|k| {
+                    let fraction = if levels > 1 {
+                        k as f64 / (levels - 1) as f64
+                    } else {
+                        1.0
+                    };
+                    let scale = smallest * (largest / smallest).powf(fraction);
+                    let t = scale * scale;
+                    let tau = t - previous_t;
+                    previous_t = t;
+                    PlannedStep {
+                        tau,
+                        scale,
+                        classify: true,
+                    }
+                })
+                .collect()
+        }
+    }
+}
+
+/// Record every 2-saddle of this level with its track, role, lobe and Hessian.
+fn observe(
+    mesh: &TetMesh,
+    f: &[f64],
+    step: usize,
+    critical: &[CriticalPoint],
+    roles: &[RoleAt],
+    tracker: &Tracker,
+    observations: &mut Vec<Vec<Observation>>,
+) {
+    let alive_here = |kind: VertexType| -> Vec<(u32, usize)> {
+        let mut v: Vec<(u32, usize)> = tracker
+            .tracks
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.alive && t.last_seen == step && t.kind == kind)
+            .map(|(i, t)| (t.vertex, i))
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let saddle_tracks = alive_here(VertexType::Saddle2);
+    let maximum_tracks = alive_here(VertexType::Maximum);
+    let track_of = |list: &[(u32, usize)], v: u32| {
+        list.binary_search_by_key(&v, |&(u, _)| u)
+            .ok()
+            .map(|i| list[i].1)
+    };
+    let found: Vec<(usize, Observation)> = critical
+        .par_iter()
+        .filter(|p| p.kind == VertexType::Saddle2)
+        .filter_map(|p| {
+            let track = track_of(&saddle_tracks, p.vertex)?;
+            let role = roles[roles.binary_search_by_key(&p.vertex, |r| r.vertex).ok()?];
+            Some((
+                track,
+                Observation {
+                    step,
+                    vertex: p.vertex,
+                    position: p.position,
+                    radius: p.radius,
+                    value: f[p.vertex as usize],
+                    role,
+                    lobe: role.younger_max.and_then(|m| track_of(&maximum_tracks, m)),
+                    hessian: hessian_at(mesh, f, p.vertex),
+                },
+            ))
+        })
+        .collect();
+    if observations.len() < tracker.tracks.len() {
+        observations.resize(tracker.tracks.len(), Vec::new());
+    }
+    for (track, observation) in found {
+        observations[track].push(observation);
+    }
+}
+
+/// The scale-space selection (see the module doc).
+fn select_over_scales(
+    mesh: &TetMesh,
+    tracks: &[Track],
+    observations: &[Vec<Observation>],
+    options: &MorseOptions,
+    scale_of: &dyn Fn(usize) -> Option<f64>,
+) -> (Vec<Saddle>, Vec<RejectedSaddle>) {
+    let mut candidates = Vec::new();
+    let mut rejected = Vec::new();
+    for (t, track) in tracks.iter().enumerate() {
+        if track.kind != VertexType::Saddle2 {
+            continue;
+        }
+        let Some(seen) = observations.get(t).filter(|o| !o.is_empty()) else {
+            continue;
+        };
+        let last = seen[seen.len() - 1];
+        let birth_scale = scale_of(track.born).unwrap_or(0.0);
+        let death_scale = if track.alive {
+            None
+        } else {
+            scale_of(track.last_seen + 1)
+        };
+        let reject = |o: &Observation, reason| RejectedSaddle {
+            vertex: o.vertex,
+            position: o.position,
+            born: track.born,
+            birth_scale,
+            death_scale,
+            reason,
+        };
+        if track.persistence() + 1 < options.min_levels {
+            rejected.push(reject(
+                &last,
+                RejectReason::ShortLived {
+                    persistence: track.persistence(),
+                },
+            ));
+            continue;
+        }
+        let fitted: Vec<(&Observation, Hessian)> = seen
+            .iter()
+            .filter_map(|o| o.hessian.filter(|h| h.is_two_saddle()).map(|h| (o, h)))
+            .collect();
+        if fitted.is_empty() {
+            let reason = match seen.iter().rev().find_map(|o| o.hessian) {
+                Some(h) => RejectReason::HessianSignature {
+                    eigenvalues: h.eigenvalues,
+                },
+                None => RejectReason::NoFit,
+            };
+            rejected.push(reject(&last, reason));
+            continue;
+        }
+        let cycle = fitted
+            .iter()
+            .find(|(o, _)| o.role.role == SaddleRole::CycleClosing);
+        let largest_bulge = seen
+            .iter()
+            .filter_map(|o| o.role.bulge)
+            .fold(None, |m: Option<f64>, b| Some(m.map_or(b, |m| m.max(b))));
+        let representative = match cycle {
+            Some(&(o, h)) => (o, h),
+            None => {
+                // Separating at every fitted level: the level of the largest bulge.
+                let &(o, h) = fitted
+                    .iter()
+                    .max_by(|a, b| {
+                        let bulge = |o: &Observation| o.role.bulge.unwrap_or(f64::INFINITY);
+                        bulge(a.0)
+                            .total_cmp(&bulge(b.0))
+                            .then(b.0.step.cmp(&a.0.step))
+                    })
+                    .unwrap_or(&fitted[0]);
+                let bulge = o.role.bulge.unwrap_or(f64::INFINITY);
+                if bulge < options.min_bulge {
+                    rejected.push(reject(o, RejectReason::LowBulge { bulge }));
+                    continue;
+                }
+                (o, h)
+            }
+        };
+        let (o, h) = representative;
+        candidates.push(Saddle {
+            vertex: o.vertex,
+            position: newton_point(o.position, &h, o.radius),
+            vertex_position: o.position,
+            value: o.value,
+            step: o.step,
+            scale: scale_of(o.step).unwrap_or(0.0),
+            born: track.born,
+            persistence: track.persistence(),
+            birth_scale,
+            death_scale,
+            role: o.role.role,
+            bulge: if o.role.role == SaddleRole::Separating {
+                largest_bulge
+            } else {
+                None
+            },
+            lobe: o.lobe,
+            hessian: h,
+            normal: h.normal(),
+        });
+    }
+    // One neck per lobe: the largest bulge cuts it off.
+    candidates.sort_by(|a, b| {
+        let bulge = |s: &Saddle| s.bulge.unwrap_or(f64::INFINITY);
+        bulge(b)
+            .total_cmp(&bulge(a))
+            .then(b.persistence.cmp(&a.persistence))
+            .then(a.vertex.cmp(&b.vertex))
+    });
+    let mut by_lobe: Vec<Saddle> = Vec::new();
+    for s in candidates {
+        let same = (s.role == SaddleRole::Separating)
+            .then(|| {
+                by_lobe.iter().find(|k| {
+                    k.role == SaddleRole::Separating && k.lobe.is_some() && k.lobe == s.lobe
+                })
+            })
+            .flatten();
+        match same {
+            Some(k) => rejected.push(RejectedSaddle {
+                vertex: s.vertex,
+                position: s.position,
+                born: s.born,
+                birth_scale: s.birth_scale,
+                death_scale: s.death_scale,
+                reason: RejectReason::SameLobe { of: k.vertex },
+            }),
+            None => by_lobe.push(s),
+        }
+    }
+    let (kept, duplicates) = merge_close(mesh, by_lobe, options.track_radius);
+    rejected.extend(duplicates);
+    (kept, rejected)
+}
+
+/// The paper's selection: the 2-saddle tracks alive at the last step.
+fn select_at_last_step(
+    mesh: &TetMesh,
+    f: &[f64],
+    tracks: &[Track],
+    observations: &[Vec<Observation>],
+    min_persistence: usize,
+    track_radius: f64,
+    scale_of: &dyn Fn(usize) -> Option<f64>,
+) -> (Vec<Saddle>, Vec<RejectedSaddle>) {
+    let mut saddles = Vec::new();
+    let mut rejected = Vec::new();
+    for (t, track) in tracks
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.alive && t.kind == VertexType::Saddle2)
+    {
+        let birth_scale = scale_of(track.born).unwrap_or(0.0);
+        let reject = |reason| RejectedSaddle {
+            vertex: track.vertex,
+            position: track.position,
+            born: track.born,
+            birth_scale,
+            death_scale: None,
+            reason,
+        };
+        if track.persistence() < min_persistence {
+            rejected.push(reject(RejectReason::ShortLived {
+                persistence: track.persistence(),
+            }));
+            continue;
+        }
+        let last = observations.get(t).and_then(|o| o.last());
+        match hessian_at(mesh, f, track.vertex) {
+            None => rejected.push(reject(RejectReason::NoFit)),
+            Some(h) if !h.is_two_saddle() => {
+                rejected.push(reject(RejectReason::HessianSignature {
+                    eigenvalues: h.eigenvalues,
+                }))
+            }
+            Some(h) => saddles.push(Saddle {
+                vertex: track.vertex,
+                position: newton_point(track.position, &h, track.radius),
+                vertex_position: track.position,
+                value: f[track.vertex as usize],
+                step: track.last_seen,
+                scale: scale_of(track.last_seen).unwrap_or(0.0),
+                born: track.born,
+                persistence: track.persistence(),
+                birth_scale,
+                death_scale: None,
+                role: last.map_or(SaddleRole::CycleClosing, |o| o.role.role),
+                bulge: last.and_then(|o| o.role.bulge),
+                lobe: last.and_then(|o| o.lobe),
+                hessian: h,
+                normal: h.normal(),
+            }),
+        }
+    }
+    let (kept, duplicates) = merge_close(mesh, saddles, track_radius);
+    rejected.extend(duplicates);
+    (kept, rejected)
+}
+
+/// Saddles within the matching radius of a more persistent one (then one with a
+/// shorter Newton step) are duplicates of it. Returns the kept ones, most persistent
+/// first, and the duplicates.
+fn merge_close(
+    mesh: &TetMesh,
+    mut saddles: Vec<Saddle>,
+    track_radius: f64,
+) -> (Vec<Saddle>, Vec<RejectedSaddle>) {
+    let step = |s: &Saddle| norm(sub(s.position, s.vertex_position));
+    saddles.sort_by(|a, b| {
+        b.persistence
+            .cmp(&a.persistence)
+            .then(step(a).total_cmp(&step(b)))
+            .then(a.vertex.cmp(&b.vertex))
+            .then(a.step.cmp(&b.step))
+    });
+    let mut kept: Vec<Saddle> = Vec::new();
+    let mut rejected = Vec::new();
+    for s in saddles {
+        let radius = track_radius * mean_edge_length(mesh, s.vertex as usize);
+        match kept
+            .iter()
+            .find(|k| norm(sub(k.position, s.position)) <= radius)
+        {
+            Some(k) => rejected.push(RejectedSaddle {
+                vertex: s.vertex,
+                position: s.position,
+                born: s.born,
+                birth_scale: s.birth_scale,
+                death_scale: s.death_scale,
+                reason: RejectReason::Duplicate { of: k.vertex },
+            }),
+            None => kept.push(s),
+        }
+    }
+    (kept, rejected)
+}
+
+/// One bar per 2-saddle track that was observed, by birth scale.
+fn barcode(
+    tracks: &[Track],
+    observations: &[Vec<Observation>],
+    saddles: &[Saddle],
+    scale_of: &dyn Fn(usize) -> Option<f64>,
+) -> Vec<Bar> {
+    let mut bars: Vec<Bar> = tracks
+        .iter()
+        .enumerate()
+        .filter(|(t, track)| {
+            track.kind == VertexType::Saddle2 && observations.get(*t).is_some_and(|o| !o.is_empty())
+        })
+        .map(|(t, track)| {
+            let seen = &observations[t];
+            Bar {
+                birth_scale: scale_of(track.born).unwrap_or(0.0),
+                death_scale: if track.alive {
+                    None
+                } else {
+                    scale_of(track.last_seen + 1)
+                },
+                cycle_closing: seen
+                    .iter()
+                    .any(|o| o.role.role == SaddleRole::CycleClosing),
+                vertex: track.vertex,
+                selected: saddles
+                    .iter()
+                    .any(|s| s.born == track.born && seen.iter().any(|o| o.vertex == s.vertex && o.step == s.step)),
+            }
+        })
+        .collect();
+    bars.sort_by(|a, b| {
+        a.birth_scale
+            .total_cmp(&b.birth_scale)
+            .then(a.vertex.cmp(&b.vertex))
+    });
+    bars
 }
 
 fn check_inputs(mesh: &TetMesh, field: &[f64], options: &MorseOptions) -> Result<()> {
@@ -344,12 +901,33 @@ fn check_inputs(mesh: &TetMesh, field: &[f64], options: &MorseOptions) -> Result
             options.track_radius
         )));
     }
+    if options.levels == 0 {
+        return Err(Error::invalid_argument("levels must be at least 1"));
+    }
+    if !(options.max_scale > 0.0 && options.max_scale.is_finite()) {
+        return Err(Error::invalid_argument(format!(
+            "max_scale = {} must be positive",
+            options.max_scale
+        )));
+    }
+    if let Some(s) = options.min_scale {
+        if !(s > 0.0 && s.is_finite()) {
+            return Err(Error::invalid_argument(format!(
+                "min_scale = {s} must be positive"
+            )));
+        }
+    }
+    if !(options.min_bulge >= 1.0 && options.min_bulge.is_finite()) {
+        return Err(Error::invalid_argument(format!(
+            "min_bulge = {} must be at least 1",
+            options.min_bulge
+        )));
+    }
     Ok(())
 }
 
-/// Longest side of the bounding box of the surface vertices (of all vertices when
-/// there are none); 1 for an empty or flat-to-a-point mesh.
-fn longest_side(mesh: &TetMesh) -> f64 {
+/// Bounding box of the surface vertices (of all vertices when there are none).
+fn surface_box(mesh: &TetMesh) -> ([f64; 3], [f64; 3]) {
     let on_surface = |v: usize| mesh.kinds[v] == VertexKind::Surface;
     let any_surface = (0..mesh.num_vertices()).any(on_surface);
     let mut lo = [f64::INFINITY; 3];
@@ -363,12 +941,51 @@ fn longest_side(mesh: &TetMesh) -> f64 {
             hi[k] = hi[k].max(p[k]);
         }
     }
+    (lo, hi)
+}
+
+/// Longest side of [`surface_box`]; 1 for an empty or flat-to-a-point mesh.
+fn longest_side(mesh: &TetMesh) -> f64 {
+    let (lo, hi) = surface_box(mesh);
     let side = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
     if side > 0.0 && side.is_finite() {
         side
     } else {
         1.0
     }
+}
+
+/// Diagonal of [`surface_box`]; 1 for an empty or flat-to-a-point mesh.
+fn diagonal(mesh: &TetMesh) -> f64 {
+    let (lo, hi) = surface_box(mesh);
+    let d = norm(sub(hi, lo));
+    if d > 0.0 && d.is_finite() {
+        d
+    } else {
+        1.0
+    }
+}
+
+/// Median length of the tets' edges (each tet's six, with repeats).
+fn median_edge_length(mesh: &TetMesh) -> f64 {
+    let mut lengths: Vec<f64> = mesh
+        .tets
+        .iter()
+        .flat_map(|t| {
+            const PAIRS: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+            PAIRS.map(|(a, b)| {
+                norm(sub(
+                    mesh.positions[t[a] as usize],
+                    mesh.positions[t[b] as usize],
+                ))
+            })
+        })
+        .collect();
+    if lengths.is_empty() {
+        return 0.0;
+    }
+    let middle = lengths.len() / 2;
+    *lengths.select_nth_unstable_by(middle, f64::total_cmp).1
 }
 
 /// Divide by the largest magnitude (nothing when the field is 0).
@@ -422,12 +1039,21 @@ fn mean_edge_length(mesh: &TetMesh, v: usize) -> f64 {
 
 fn summarize(
     step: usize,
+    scale: f64,
     c: &Classification,
+    roles: &[RoleAt],
     morse_expected: i64,
     events: StepEvents,
 ) -> StepSummary {
+    let cycle_closing = roles
+        .iter()
+        .filter(|r| r.role == SaddleRole::CycleClosing)
+        .count();
     StepSummary {
         step,
+        scale,
+        separating: roles.len() - cycle_closing,
+        cycle_closing,
         minima: c.count(VertexType::Minimum),
         maxima: c.count(VertexType::Maximum),
         saddles1: c.count(VertexType::Saddle1),
@@ -438,79 +1064,6 @@ fn summarize(
         morse_ok: c.morse_sum == morse_expected,
         events,
     }
-}
-
-/// Split the 2-saddle tracks alive at the end into selected and rejected.
-fn select(
-    mesh: &TetMesh,
-    f: &[f64],
-    tracks: &[Track],
-    min_persistence: usize,
-    track_radius: f64,
-) -> (Vec<Saddle>, Vec<RejectedSaddle>) {
-    let mut saddles = Vec::new();
-    let mut rejected = Vec::new();
-    for track in tracks
-        .iter()
-        .filter(|t| t.alive && t.kind == VertexType::Saddle2)
-    {
-        let reject = |reason| RejectedSaddle {
-            vertex: track.vertex,
-            position: track.position,
-            born: track.born,
-            reason,
-        };
-        if track.persistence() < min_persistence {
-            rejected.push(reject(RejectReason::ShortLived {
-                persistence: track.persistence(),
-            }));
-            continue;
-        }
-        match hessian_at(mesh, f, track.vertex) {
-            None => rejected.push(reject(RejectReason::NoFit)),
-            Some(h) if !h.is_two_saddle() => {
-                rejected.push(reject(RejectReason::HessianSignature {
-                    eigenvalues: h.eigenvalues,
-                }))
-            }
-            Some(h) => saddles.push(Saddle {
-                vertex: track.vertex,
-                position: newton_point(track.position, &h, track.radius),
-                vertex_position: track.position,
-                value: f[track.vertex as usize],
-                born: track.born,
-                persistence: track.persistence(),
-                hessian: h,
-                normal: h.normal(),
-            }),
-        }
-    }
-    // Most persistent first, then the shortest Newton step: the order in which
-    // duplicates give way.
-    let step = |s: &Saddle| norm(sub(s.position, s.vertex_position));
-    saddles.sort_by(|a, b| {
-        b.persistence
-            .cmp(&a.persistence)
-            .then(step(a).total_cmp(&step(b)))
-            .then(a.vertex.cmp(&b.vertex))
-    });
-    let mut kept: Vec<Saddle> = Vec::new();
-    for s in saddles {
-        let radius = track_radius * mean_edge_length(mesh, s.vertex as usize);
-        match kept
-            .iter()
-            .find(|k| norm(sub(k.position, s.position)) <= radius)
-        {
-            Some(k) => rejected.push(RejectedSaddle {
-                vertex: s.vertex,
-                position: s.position,
-                born: s.born,
-                reason: RejectReason::Duplicate { of: k.vertex },
-            }),
-            None => kept.push(s),
-        }
-    }
-    (kept, rejected)
 }
 
 /// `p − H⁻¹ g` from the fitted quadratic, when that step is no longer than `radius`

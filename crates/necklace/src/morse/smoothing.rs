@@ -50,6 +50,13 @@ pub struct HeatSolver {
     free: Vec<u32>,
     /// `(M + τL)_ff` in free indices.
     matrix: SparseMatrix,
+    /// `L_ff`'s values in `matrix`'s pattern, and where each row's diagonal is: to
+    /// change `τ` without assembling again.
+    stiffness_values: Vec<f64>,
+    diagonal_index: Vec<usize>,
+    /// `L_fd F_d` (without `τ`).
+    boundary_stiffness: Vec<f64>,
+    tau: f64,
     /// `1 / diag(matrix)`.
     inverse_diagonal: Vec<f64>,
     /// `M_f`.
@@ -85,39 +92,83 @@ impl HeatSolver {
         }
         let mut row_start = vec![0usize];
         let mut cols = Vec::new();
-        let mut vals = Vec::new();
-        let mut boundary = Vec::with_capacity(free.len());
-        for &v in &free {
+        let mut stiffness_values = Vec::new();
+        let mut diagonal_index = vec![usize::MAX; free.len()];
+        let mut boundary_stiffness = Vec::with_capacity(free.len());
+        for (i, &v) in free.iter().enumerate() {
             let mut from_fixed = 0.0;
             for (c, x) in stiffness.row(v as usize) {
                 let l = local[c as usize];
                 if l == u32::MAX {
                     from_fixed += x * boundary_values[c as usize];
                 } else {
-                    let diagonal = if c == v { mass[v as usize] } else { 0.0 };
+                    if c == v {
+                        diagonal_index[i] = cols.len();
+                    }
                     cols.push(l);
-                    vals.push(diagonal + tau * x);
+                    stiffness_values.push(x);
                 }
             }
-            boundary.push(tau * from_fixed);
+            if diagonal_index[i] == usize::MAX {
+                // A free vertex with no stiffness entry of its own: keep its mass.
+                diagonal_index[i] = cols.len();
+                cols.push(i as u32);
+                stiffness_values.push(0.0);
+            }
+            boundary_stiffness.push(from_fixed);
             row_start.push(cols.len());
         }
-        let matrix = SparseMatrix {
-            n: free.len(),
-            row_start,
-            cols,
-            vals,
-        };
-        let inverse_diagonal = (0..free.len()).map(|i| 1.0 / matrix.get(i, i)).collect();
+        let n = free.len();
         let mass = free.iter().map(|&v| mass[v as usize]).collect();
-        HeatSolver {
+        let mut solver = HeatSolver {
             free,
-            matrix,
-            inverse_diagonal,
+            matrix: SparseMatrix {
+                n,
+                row_start,
+                cols,
+                vals: Vec::new(),
+            },
+            stiffness_values,
+            diagonal_index,
+            boundary_stiffness,
+            tau: 0.0,
+            inverse_diagonal: Vec::new(),
             mass,
-            boundary,
+            boundary: Vec::new(),
             options,
             history: Vec::new(),
+        };
+        solver.set_tau(tau);
+        solver
+    }
+
+    /// The time step `τ` of the next steps.
+    pub fn tau(&self) -> f64 {
+        self.tau
+    }
+
+    /// Change the time step: `(M + τL)_ff` and `τ L_fd F_d` are rebuilt from the stored
+    /// parts (no assembly), and the stored solutions' right-hand sides are recomputed
+    /// for the new matrix so that the next initial guess stays a Galerkin projection.
+    pub fn set_tau(&mut self, tau: f64) {
+        if tau == self.tau && !self.matrix.vals.is_empty() {
+            return;
+        }
+        self.tau = tau;
+        let mut vals: Vec<f64> = self.stiffness_values.iter().map(|x| tau * x).collect();
+        for (i, &d) in self.diagonal_index.iter().enumerate() {
+            vals[d] += self.mass[i];
+        }
+        self.matrix.vals = vals;
+        self.inverse_diagonal = self
+            .diagonal_index
+            .iter()
+            .map(|&d| 1.0 / self.matrix.vals[d])
+            .collect();
+        self.boundary = self.boundary_stiffness.iter().map(|x| tau * x).collect();
+        let matrix = &self.matrix;
+        for (x, b) in &mut self.history {
+            matrix.mul_vec_into(x, b);
         }
     }
 

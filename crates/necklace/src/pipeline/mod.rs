@@ -28,9 +28,9 @@ use serde::Serialize;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
 use crate::io;
-use crate::loops::{self, DropReason, DroppedLoop, LoopKind, LoopOptions, NeckLoop, Seed};
+use crate::loops::{self, DropReason, DroppedLoop, LoopKind, LoopOptions, NeckLoop, Role, Seed};
 use crate::mesh::{MeshReport, SurfaceMesh};
-use crate::morse::{self, MorseOptions, MorseResult, VertexType};
+use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule, VertexType};
 use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 
@@ -131,7 +131,17 @@ pub fn critical_points(
     options: &MorseOptions,
 ) -> Result<MorseResult> {
     let field = distance_field(surface, &volume.mesh);
-    morse::analyze(&volume.mesh, &field, options)
+    morse::analyze(&volume.mesh, &field, &morse_options_for(options, volume))
+}
+
+/// The Morse options for one volume mesh: the scale space starts at twice its lattice
+/// spacing unless the caller chose a smallest scale.
+pub fn morse_options_for(options: &MorseOptions, volume: &VolumeResult) -> MorseOptions {
+    let mut options = *options;
+    if options.min_scale.is_none() {
+        options.min_scale = Some(2.0 * volume.h);
+    }
+    options
 }
 
 /// What `necklace critical --json` prints: the volume mesh's summary and the Morse
@@ -376,6 +386,12 @@ pub fn loop_seeds(result: &MorseResult) -> Vec<Seed> {
             position: s.position,
             normal: s.normal,
             persistence: s.persistence,
+            role: Some(match s.role {
+                SaddleRole::Separating => Role::Separating,
+                SaddleRole::CycleClosing => Role::CycleClosing,
+            }),
+            scales: (s.birth_scale, s.death_scale),
+            bulge: s.bulge,
         })
         .collect()
 }
@@ -451,12 +467,20 @@ pub fn find_necks_with_progress(
         let field = distance_field(surface, &volume.mesh);
         let distance_seconds = start.elapsed().as_secs_f64();
         progress.finish();
-        let result = morse::analyze_with_progress(&volume.mesh, &field, &options.morse, progress)?;
+        let morse_options = morse_options_for(&options.morse, &volume);
+        let result =
+            morse::analyze_with_progress(&volume.mesh, &field, &morse_options, progress)?;
+        // The paper's schedule reproduces the paper's selection: no homology step.
+        let loop_options = LoopOptions {
+            homology_selection: options.loops.homology_selection
+                && options.morse.schedule == Schedule::ScaleSpace,
+            ..options.loops
+        };
         let found = loops::find_loops_with_progress(
             surface,
             &loop_seeds(&result),
             kind,
-            &options.loops,
+            &loop_options,
             progress,
         )?;
 

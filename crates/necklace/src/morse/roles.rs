@@ -1,0 +1,243 @@
+//! The topological role of each 2-saddle: does it join two lobes or close a cycle?
+//! (issue 13; the paper's "distance to nearby loops" rule done by topology).
+//!
+//! Sweep the superlevel sets `{f ≥ c}` from the top down (in the classification's vertex
+//! order: outer-sphere vertices first, then interior vertices by decreasing `(f, index)`;
+//! surface vertices are the bottom and never added) with a union–find over the
+//! vertices. Outer-sphere vertices form one component from the start, older than any
+//! maximum. When a 2-saddle `v` is added, its two upper link components are already in
+//! the superlevel set (every upper link vertex is above `v`):
+//! - if they lie in different components, `v` is *separating*: it joins two lobes, and
+//!   by the elder rule the lobe with the lower maximum (the *younger* one) dies there;
+//!   its *bulge ratio* is how much fatter the lobe is than the neck: the largest
+//!   unsmoothed distance (inscribed radius) over the younger lobe's vertices, over the
+//!   largest over `v` and its neighbours (a lattice vertex next to a neck's core sees
+//!   less than the core's radius; the smoothed field's own ratio grows without bound
+//!   with the scale, as heat drains from thin parts first);
+//! - if they lie in the same component, `v` is *cycle-closing*: it closes a 1-cycle of
+//!   the superlevel set, a handle (inside) or a tunnel (outside) of the genus, or noise
+//!   that a 1-saddle fills again lower down.
+//!
+//! Entry points: [`Sweep::new`] once per mesh (vertex adjacency), then [`Sweep::roles`]
+//! per field. Sequential and sorted: the result does not depend on the thread count.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::critical::{Classification, VertexType};
+use crate::tet::{TetMesh, VertexKind};
+
+/// What a 2-saddle does to the superlevel sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SaddleRole {
+    /// Joins two lobes (two components of the superlevel set).
+    Separating,
+    /// Closes a cycle of one component: a handle (inside) or tunnel (outside).
+    CycleClosing,
+}
+
+/// The role of one 2-saddle at one level.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RoleAt {
+    /// The 2-saddle's vertex.
+    pub vertex: u32,
+    /// Separating or cycle-closing.
+    pub role: SaddleRole,
+    /// Separating: the maximum of the lobe that dies here (the lower of the two).
+    pub younger_max: Option<u32>,
+    /// Separating: the bulge ratio: the largest unsmoothed distance `d` over the
+    /// younger lobe, over the largest `d` over the saddle and its neighbours (infinite
+    /// when that is 0).
+    pub bulge: Option<f64>,
+    /// Separating: `f(younger_max) / f(vertex)` on the smoothed field of this level.
+    pub field_ratio: Option<f64>,
+}
+
+/// Vertex adjacency of a mesh, built once; see the module doc.
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    kinds: Vec<VertexKind>,
+    start: Vec<usize>,
+    neighbours: Vec<u32>,
+}
+
+/// The outer sphere's component has no maximum vertex.
+const OUTER: u32 = u32::MAX;
+
+impl Sweep {
+    /// Build the vertex adjacency (the edges of the tets).
+    pub fn new(mesh: &TetMesh) -> Sweep {
+        let neighbours: Vec<Vec<u32>> = (0..mesh.num_vertices())
+            .into_par_iter()
+            .map(|v| {
+                let mut around: Vec<u32> = mesh
+                    .vertex_tets(v)
+                    .iter()
+                    .flat_map(|&t| mesh.tets[t as usize])
+                    .filter(|&u| u as usize != v)
+                    .collect();
+                around.sort_unstable();
+                around.dedup();
+                around
+            })
+            .collect();
+        let mut start = Vec::with_capacity(neighbours.len() + 1);
+        start.push(0);
+        for n in &neighbours {
+            start.push(start.last().copied().unwrap_or(0) + n.len());
+        }
+        Sweep {
+            kinds: mesh.kinds.clone(),
+            start,
+            neighbours: neighbours.concat(),
+        }
+    }
+
+    /// The role of every 2-saddle of `classification` (a classification of `f`), in
+    /// vertex order; `distance` is the unsmoothed field (for the bulge ratios).
+    pub fn roles(
+        &self,
+        f: &[f64],
+        classification: &Classification,
+        distance: &[f64],
+    ) -> Vec<RoleAt> {
+        let n = self.kinds.len();
+        let mut interior: Vec<u32> = (0..n as u32)
+            .filter(|&v| self.kinds[v as usize] == VertexKind::Interior)
+            .collect();
+        interior.par_sort_unstable_by(|&a, &b| {
+            f[b as usize]
+                .total_cmp(&f[a as usize])
+                .then(b.cmp(&a))
+        });
+        let outer = (0..n as u32).filter(|&v| self.kinds[v as usize] == VertexKind::Outer);
+
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut added = vec![false; n];
+        // Per root: the highest vertex of its component (OUTER for the sphere's).
+        let mut top = vec![OUTER; n];
+        // Per root: the largest unsmoothed distance in its component.
+        let mut fattest = vec![0.0f64; n];
+        let mut first_outer = None;
+        for v in outer {
+            added[v as usize] = true;
+            match first_outer {
+                None => first_outer = Some(v),
+                Some(o) => parent[v as usize] = o,
+            }
+        }
+        let mut roles = Vec::new();
+        let mut roots: Vec<u32> = Vec::new();
+        for &v in &interior {
+            let vi = v as usize;
+            added[vi] = true;
+            top[vi] = v;
+            fattest[vi] = distance[vi];
+            roots.clear();
+            for &u in &self.neighbours[self.start[vi]..self.start[vi + 1]] {
+                if added[u as usize] && u != v {
+                    roots.push(find(&mut parent, u));
+                }
+            }
+            roots.sort_unstable();
+            roots.dedup();
+            if classification.classes[vi].kind == VertexType::Saddle2 {
+                roles.push(self.role_of(v, f, distance, &roots, &top, &fattest));
+            }
+            // Union: the component with the highest top survives as the root.
+            let mut root = v;
+            for &r in &roots {
+                let (keep, lose) = if above(f, top[r as usize], top[root as usize]) {
+                    (r, root)
+                } else {
+                    (root, r)
+                };
+                parent[lose as usize] = keep;
+                fattest[keep as usize] = fattest[keep as usize].max(fattest[lose as usize]);
+                root = keep;
+            }
+        }
+        roles.sort_by_key(|r| r.vertex);
+        roles
+    }
+
+    /// The largest of `distance` over `v` and its neighbours.
+    fn ring_max(&self, v: u32, distance: &[f64]) -> f64 {
+        let v = v as usize;
+        self.neighbours[self.start[v]..self.start[v + 1]]
+            .iter()
+            .map(|&u| distance[u as usize])
+            .fold(distance[v], f64::max)
+    }
+
+    fn role_of(
+        &self,
+        v: u32,
+        f: &[f64],
+        distance: &[f64],
+        roots: &[u32],
+        top: &[u32],
+        fattest: &[f64],
+    ) -> RoleAt {
+        if roots.len() < 2 {
+            return RoleAt {
+                vertex: v,
+                role: SaddleRole::CycleClosing,
+                younger_max: None,
+                bulge: None,
+                field_ratio: None,
+            };
+        }
+        // The younger of the joined lobes: the lowest top among them.
+        let younger_root = roots
+            .iter()
+            .copied()
+            .min_by(|&a, &b| {
+                if above(f, top[a as usize], top[b as usize]) {
+                    std::cmp::Ordering::Greater
+                } else {
+                    std::cmp::Ordering::Less
+                }
+            })
+            .unwrap_or(roots[0]);
+        let younger = top[younger_root as usize];
+        let neck = self.ring_max(v, distance);
+        let bulge = if younger == OUTER {
+            None
+        } else if neck > 0.0 {
+            Some(fattest[younger_root as usize] / neck)
+        } else {
+            Some(f64::INFINITY)
+        };
+        RoleAt {
+            vertex: v,
+            role: SaddleRole::Separating,
+            younger_max: (younger != OUTER).then_some(younger),
+            bulge,
+            field_ratio: (younger != OUTER && f[v as usize] > 0.0)
+                .then(|| f[younger as usize] / f[v as usize]),
+        }
+    }
+}
+
+/// Whether component top `a` is above `b` (the outer sphere is above everything).
+fn above(f: &[f64], a: u32, b: u32) -> bool {
+    match (a == OUTER, b == OUTER) {
+        (true, _) => b != OUTER,
+        (false, true) => false,
+        _ => f[a as usize]
+            .total_cmp(&f[b as usize])
+            .then(a.cmp(&b))
+            .is_gt(),
+    }
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        let up = parent[parent[x as usize] as usize];
+        parent[x as usize] = up;
+        x = up;
+    }
+    x
+}
