@@ -597,18 +597,28 @@ pub fn loops_table(report: &pipeline::NeckReport) -> Result<String> {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "  #  kind    length      radius    centre                          persistence  tightening"
+        "  #  kind    length      radius    centre                          role           scales             separates  persistence  tightening"
     );
     for (i, l) in report.loops.iter().enumerate() {
+        let role = match l.role {
+            Some(necklace::loops::Role::Separating) => "separating",
+            Some(necklace::loops::Role::CycleClosing) => "cycle-closing",
+            None => "-",
+        };
+        let scales = match l.death_scale {
+            Some(d) => format!("{:.3}..{:.3}", l.birth_scale, d),
+            None => format!("{:.3}..", l.birth_scale),
+        };
         let _ = writeln!(
             out,
-            "{i:>3}  {:<6}  {:<10.5}  {:<8.5}  ({:>8.4}, {:>8.4}, {:>8.4})  {:>11}  {:?} in {} rounds (from {:.5})",
+            "{i:>3}  {:<6}  {:<10.5}  {:<8.5}  ({:>8.4}, {:>8.4}, {:>8.4})  {role:<13}  {scales:<17}  {:<9}  {:>11}  {:?} in {} rounds (from {:.5})",
             format!("{:?}", l.kind).to_lowercase(),
             l.length,
             l.radius,
             l.center[0],
             l.center[1],
             l.center[2],
+            if l.separating { "yes" } else { "no" },
             l.persistence,
             l.tightening.status,
             l.tightening.rounds,

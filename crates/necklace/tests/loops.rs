@@ -12,7 +12,6 @@ use necklace::loops::{
     Tightened,
 };
 use necklace::mesh::Topology;
-use necklace::morse::MorseOptions;
 use necklace::pipeline::{find_necks, NeckOptions, NeckReport};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::SurfaceMesh;
@@ -205,15 +204,11 @@ fn winding_xy(points: &[[f64; 3]], x: f64, y: f64) -> i64 {
     (total / (2.0 * PI)).round() as i64
 }
 
-fn necks(shape: &Shape, handles: bool, tunnels: bool, steps: usize) -> NeckReport {
+fn necks(shape: &Shape, handles: bool, tunnels: bool) -> NeckReport {
     let mesh = shape.mesh().unwrap();
     let options = NeckOptions {
         handles,
         tunnels,
-        morse: MorseOptions {
-            steps,
-            ..MorseOptions::default()
-        },
         ..NeckOptions::default()
     };
     let report = find_necks(&mesh, &options).unwrap();
@@ -232,7 +227,7 @@ fn of_kind(report: &NeckReport, kind: LoopKind) -> Vec<&NeckLoop> {
 #[test]
 fn a_dumbbell_has_one_handle_loop_around_its_neck_and_no_tunnel() {
     let shape = Shape::new(ShapeKind::Dumbbell);
-    let r = necks(&shape, true, true, 20);
+    let r = necks(&shape, true, true);
     let handles = of_kind(&r, LoopKind::Handle);
     assert_eq!(handles.len(), 1, "{:?}", r.dropped);
     assert!(of_kind(&r, LoopKind::Tunnel).is_empty());
@@ -249,7 +244,7 @@ fn a_dumbbell_has_one_handle_loop_around_its_neck_and_no_tunnel() {
 
 #[test]
 fn a_chain_of_three_balls_has_two_handle_loops() {
-    let r = necks(&Shape::new(ShapeKind::Chain), true, false, 20);
+    let r = necks(&Shape::new(ShapeKind::Chain), true, false);
     let handles = of_kind(&r, LoopKind::Handle);
     assert_eq!(handles.len(), 2, "{:?}", r.dropped);
     let mut xs: Vec<f64> = handles.iter().map(|l| l.center[0]).collect();
@@ -263,7 +258,7 @@ fn a_chain_of_three_balls_has_two_handle_loops() {
 #[test]
 fn a_varying_torus_has_a_handle_at_its_thin_side_and_a_tunnel_around_its_hole() {
     let shape = Shape::new(ShapeKind::VaryingTorus);
-    let r = necks(&shape, true, true, 20);
+    let r = necks(&shape, true, true);
     let handles = of_kind(&r, LoopKind::Handle);
     assert_eq!(handles.len(), 1, "{:?}", r.dropped);
     let thin = 2.0 * PI * shape.param("r0") * (1.0 - shape.param("a"));
@@ -282,7 +277,7 @@ fn a_varying_torus_has_a_handle_at_its_thin_side_and_a_tunnel_around_its_hole() 
 #[test]
 fn an_eight_has_two_handle_loops_of_the_tube_radius_and_two_tunnels() {
     let shape = Shape::new(ShapeKind::Eight);
-    let r = necks(&shape, true, true, 50);
+    let r = necks(&shape, true, true);
     let handles = of_kind(&r, LoopKind::Handle);
     assert_eq!(handles.len(), 2, "{:?}", r.dropped);
     let tube = 2.0 * PI * shape.param("r");
@@ -308,8 +303,56 @@ fn an_eight_has_two_handle_loops_of_the_tube_radius_and_two_tunnels() {
 }
 
 #[test]
+fn a_torus_has_exactly_one_handle_of_its_tube_radius_and_one_tunnel() {
+    let shape = Shape::new(ShapeKind::Torus);
+    let r = necks(&shape, true, true);
+    let handles = of_kind(&r, LoopKind::Handle);
+    assert_eq!(handles.len(), 1, "{:?}", r.dropped);
+    let tube = 2.0 * PI * shape.param("r");
+    assert!((handles[0].length - tube).abs() < 0.01 * tube);
+    assert_eq!(of_kind(&r, LoopKind::Tunnel).len(), 1, "{:?}", r.dropped);
+    // Neither separates the torus; together they span its homology.
+    for l in &r.loops {
+        assert!(!l.separating && l.areas.is_none(), "{l:?}");
+        assert_eq!(l.homology.len(), 2);
+    }
+    assert_ne!(r.loops[0].homology, r.loops[1].homology);
+    // The other saddles of the uniform tube are the same cycle, and say so.
+    assert!(r.dropped.iter().all(|d| matches!(
+        d.reason,
+        DropReason::SameCycle { .. } | DropReason::Duplicate { .. }
+    )));
+}
+
+#[test]
+fn a_pretzel_of_genus_3_has_three_handles_and_three_tunnels_of_rank_3_each() {
+    let shape = Shape::new(ShapeKind::Pretzel).with("g", 3.0).unwrap();
+    let r = necks(&shape, true, true);
+    let rank = |kind| {
+        let classes: Vec<Vec<u64>> = of_kind(&r, kind).iter().map(|l| l.class()).collect();
+        (classes.len(), necklace::mesh::z2_rank(&classes))
+    };
+    assert_eq!(rank(LoopKind::Handle), (3, 3), "{:?}", r.dropped);
+    assert_eq!(rank(LoopKind::Tunnel), (3, 3), "{:?}", r.dropped);
+    let tube = 2.0 * PI * shape.param("r");
+    for l in of_kind(&r, LoopKind::Handle) {
+        assert!((l.length - tube).abs() < 0.01 * tube, "{}", l.length);
+    }
+}
+
+#[test]
+fn a_dumbbell_neck_loop_separates_the_surface_into_two_equal_halves() {
+    let r = necks(&Shape::new(ShapeKind::Dumbbell), true, false);
+    let l = &r.loops[0];
+    assert!(l.separating && l.homology.is_empty());
+    let [a, b] = l.areas.unwrap();
+    assert!((a - b).abs() < 0.02 * b, "{a} {b}");
+    assert!(l.bulge.unwrap() > 2.0, "{:?}", l.bulge);
+}
+
+#[test]
 fn a_sphere_has_no_loop_inside_or_outside() {
-    let r = necks(&Shape::new(ShapeKind::Sphere), true, true, 20);
+    let r = necks(&Shape::new(ShapeKind::Sphere), true, true);
     assert!(r.loops.is_empty());
     assert!(r.dropped.is_empty());
 }
@@ -322,6 +365,7 @@ fn a_loop_that_slides_off_a_cap_is_dropped_as_collapsed() {
         position: [0.0, 0.0, 0.5],
         normal: [0.0, 0.0, 1.0],
         persistence: 10,
+        ..Seed::default()
     }];
     let r = find_loops(&mesh, &seeds, LoopKind::Handle, &LoopOptions::default()).unwrap();
     assert!(r.loops.is_empty());
@@ -340,6 +384,7 @@ fn a_plane_that_misses_the_saddle_gives_a_reasoned_drop_and_bad_seeds_an_error()
         position: [3.0, 0.0, 0.0],
         normal: [0.0, 0.0, 1.0],
         persistence: 5,
+        ..Seed::default()
     }];
     let r = find_loops(&mesh, &outside, LoopKind::Tunnel, &LoopOptions::default()).unwrap();
     assert!(matches!(
@@ -389,6 +434,7 @@ fn loops_do_not_depend_on_the_thread_count_and_duplicates_merge() {
             position: [1.0 + 0.01 * i as f64, 0.0, 0.0],
             normal: [0.0, 1.0, 0.0],
             persistence: 10 + i % 3,
+            ..Seed::default()
         })
         .collect();
     let run = |threads: usize| {

@@ -6,8 +6,8 @@ mod common;
 
 use common::Inside;
 use necklace::morse::{
-    analyze, classify, hessian_at, CriticalPoint, MorseOptions, MorseResult, RejectReason, Tracker,
-    VertexType,
+    analyze, classify, hessian_at, CriticalPoint, MorseOptions, MorseResult, RejectReason,
+    SaddleRole, Schedule, Tracker, VertexType,
 };
 use necklace::pipeline::{
     critical_points, surface_morse_expected, volume_mesh, Side, VolumeOptions,
@@ -16,14 +16,21 @@ use necklace::shapes::{Shape, ShapeKind};
 use necklace::volume::{stuff_volume, StuffingOptions};
 use necklace::{ErrorKind, MeshReport, TetMesh, VertexKind};
 
+/// The paper's schedule with `steps` steps (its tests predate the scale space and
+/// check that the schedule still behaves as it did).
 fn run(shape: &Shape, side: Side, steps: usize) -> MorseResult {
-    let surface = shape.mesh().unwrap();
-    let volume = volume_mesh(&surface, side, &VolumeOptions::default()).unwrap();
     let options = MorseOptions {
+        schedule: Schedule::Paper,
         steps,
         ..MorseOptions::default()
     };
-    let result = critical_points(&surface, &volume, &options).unwrap();
+    run_with(shape, side, &options)
+}
+
+fn run_with(shape: &Shape, side: Side, options: &MorseOptions) -> MorseResult {
+    let surface = shape.mesh().unwrap();
+    let volume = volume_mesh(&surface, side, &VolumeOptions::default()).unwrap();
+    let result = critical_points(&surface, &volume, options).unwrap();
     let expected = surface_morse_expected(&MeshReport::new(&surface), side).unwrap();
     for s in &result.steps {
         assert!(s.morse_ok, "{}: {s:?}", shape.kind());
@@ -412,4 +419,69 @@ fn bad_fields_and_options_are_errors() {
     // A zero field is a valid (if featureless) input.
     let r = analyze(&mesh, &vec![0.0; n], &ok).unwrap();
     assert!(r.steps.iter().all(|s| s.morse_ok));
+}
+
+#[test]
+fn the_scale_space_classifies_every_level_from_twice_h_to_a_quarter_diagonal() {
+    let shape = Shape::new(ShapeKind::Torus);
+    let surface = shape.mesh().unwrap();
+    let volume = volume_mesh(&surface, Side::Inside, &VolumeOptions::default()).unwrap();
+    let r = critical_points(&surface, &volume, &MorseOptions::default()).unwrap();
+    assert_eq!(r.schedule, Schedule::ScaleSpace);
+    assert_eq!(r.steps.len(), 32);
+    let first = r.steps[0].scale;
+    let last = r.steps[31].scale;
+    assert!((first - 2.0 * volume.h).abs() < 1e-9 * first, "{first}");
+    assert!(
+        (last - 0.25 * surface.bbox_diagonal()).abs() < 1e-3 * last,
+        "{last}"
+    );
+    // Geometric: a constant ratio from level to level.
+    let ratio = (last / first).powf(1.0 / 31.0);
+    for w in r.steps.windows(2) {
+        assert!((w[1].scale / w[0].scale - ratio).abs() < 1e-9);
+    }
+    assert!(r.morse_failures().next().is_none());
+    // A solid torus: its selected saddles close its one cycle.
+    assert!(!r.saddles.is_empty());
+    assert!(r.saddles.iter().all(|s| s.role == SaddleRole::CycleClosing));
+}
+
+#[test]
+fn a_dumbbell_neck_is_separating_with_the_ball_to_neck_radius_as_bulge() {
+    // Balls of radius 0.5 joined by a neck of radius 0.15: bulge 0.5 / 0.15 = 3.3.
+    let shape = Shape::new(ShapeKind::Dumbbell)
+        .with("offset", 0.8)
+        .unwrap()
+        .with("neck", 0.15)
+        .unwrap();
+    let r = run_with(&shape, Side::Inside, &MorseOptions::default());
+    assert_eq!(r.saddles.len(), 1, "{:?}", r.saddles);
+    let s = r.saddles[0];
+    assert_eq!(s.role, SaddleRole::Separating);
+    let bulge = s.bulge.unwrap();
+    assert!(
+        (bulge - 0.5 / 0.15).abs() < 0.15 * 0.5 / 0.15,
+        "bulge {bulge}"
+    );
+    assert!(distance(s.position, [0.0; 3]) < 0.05, "{s:?}");
+    assert!(s.birth_scale > 0.0 && s.death_scale.is_none_or(|d| d > s.birth_scale));
+    // Each level's counts: the neck joins the two balls' lobes.
+    assert!(r.steps.iter().any(|l| l.separating >= 1));
+}
+
+#[test]
+fn a_capsule_like_tube_has_no_separating_neck() {
+    // A dumbbell whose balls are barely thicker than its neck is nearly a capsule.
+    let shape = Shape::new(ShapeKind::Dumbbell)
+        .with("radius", 0.2)
+        .unwrap()
+        .with("neck", 0.19)
+        .unwrap();
+    let r = run_with(&shape, Side::Inside, &MorseOptions::default());
+    assert!(
+        r.saddles.iter().all(|s| s.role != SaddleRole::Separating),
+        "{:?}",
+        r.saddles
+    );
 }

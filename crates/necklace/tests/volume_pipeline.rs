@@ -5,7 +5,7 @@ mod common;
 
 use std::f64::consts::PI;
 
-use necklace::morse::{MorseOptions, SolverOptions};
+use necklace::morse::{MorseOptions, Schedule, SolverOptions};
 use necklace::pipeline::{
     critical_points, surface_morse_expected, volume_mesh, Side, VolumeOptions,
 };
@@ -184,6 +184,7 @@ fn every_shared_mesh_meshes_with_its_topology_and_angles_and_passes_the_morse_ch
             // (steps 1 and 2: the most critical points, the hardest case).
             // The identity is combinatorial: a loose solve gives as valid a field.
             let options = MorseOptions {
+                schedule: Schedule::Paper,
                 initial_steps: 1,
                 steps: 2,
                 solver: SolverOptions {

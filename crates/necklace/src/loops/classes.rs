@@ -127,7 +127,12 @@ fn carrier(p: SurfacePoint) -> ([u32; 2], usize) {
 
 /// The lowest-indexed face containing both points' carriers (the first face of `p`'s
 /// carrier when none does, which a valid loop never needs).
-fn segment_face(surface: &SurfaceMesh, topology: &Topology, p: SurfacePoint, q: SurfacePoint) -> usize {
+fn segment_face(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    p: SurfacePoint,
+    q: SurfacePoint,
+) -> usize {
     let (pv, pn) = carrier(p);
     let (qv, qn) = carrier(q);
     let candidates = topology.vertex_faces(pv[0] as usize);
@@ -183,6 +188,10 @@ fn turn_around(
         if faces.len() != 2 {
             return;
         }
-        f = if faces[0] as usize == f { faces[1] } else { faces[0] } as usize;
+        f = if faces[0] as usize == f {
+            faces[1]
+        } else {
+            faces[0]
+        } as usize;
     }
 }

@@ -160,6 +160,19 @@ pub struct NeckLoop {
     pub tightening: TighteningReport,
 }
 
+impl NeckLoop {
+    /// [`NeckLoop::homology`] as bits packed in `u64` words (for `mesh::z2_rank`).
+    pub fn class(&self) -> Vec<u64> {
+        let mut bits = vec![0u64; self.homology.len().div_ceil(64)];
+        for (g, c) in self.homology.chars().enumerate() {
+            if c == '1' {
+                bits[g / 64] |= 1 << (g % 64);
+            }
+        }
+        bits
+    }
+}
+
 /// Diagnostics of the tightening of a kept loop.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct TighteningReport {
@@ -310,8 +323,8 @@ pub fn find_loops_with_progress(
     let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
         .par_iter()
         .map(|seed| {
-            let outcome = loop_from_seed(surface, &topology, &geometry, seed, options)
-                .map(|tightened| {
+            let outcome =
+                loop_from_seed(surface, &topology, &geometry, seed, options).map(|tightened| {
                     let (crossed, _) =
                         classes::crossings(surface, &topology, &tightened.surface_points);
                     Candidate {
@@ -554,7 +567,11 @@ fn select(
     let diagonal = surface.bbox_diagonal();
     let mut loops: Vec<NeckLoop> = Vec::new();
     for (i, c) in candidates {
-        let Candidate { tightened: t, class, .. } = c;
+        let Candidate {
+            tightened: t,
+            class,
+            ..
+        } = c;
         let center = centroid(&t.points);
         let duplicate_of = loops.iter().position(|l| {
             norm(sub(l.center, center)) <= options.merge_distance * diagonal
@@ -620,7 +637,13 @@ fn select(
 /// A class as one `0`/`1` character per basis cycle.
 fn class_string(class: &[u64], len: usize) -> String {
     (0..len)
-        .map(|g| if class[g / 64] >> (g % 64) & 1 == 1 { '1' } else { '0' })
+        .map(|g| {
+            if class[g / 64] >> (g % 64) & 1 == 1 {
+                '1'
+            } else {
+                '0'
+            }
+        })
         .collect()
 }
 

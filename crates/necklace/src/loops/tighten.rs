@@ -274,17 +274,30 @@ pub fn tighten(
             }
             Some(n) => updates += n,
             None => {
+                // Keep the strip the last path lies in.
+                if let Some(prev) = &previous {
+                    strip = prev.clone();
+                }
                 status = TightenStatus::InvalidStrip;
                 break;
             }
         }
-        // A strip that keeps growing is sliding around the surface, not settling.
+        // A strip that keeps growing is sliding around the surface, not settling. The
+        // last path lies in the strip before this round's update: report on that one.
         if strip.portals.len() > 20 * crossings.len() + 1000 {
+            if let Some(prev) = &previous {
+                strip = prev.clone();
+            }
             status = TightenStatus::NotConverged;
             break;
         }
     }
 
+    // The path must lie in the strip reported on (one crossing per portal).
+    let path = path.filter(|p| p.crossings.len() == strip.portals.len());
+    if path.is_none() && status != TightenStatus::NotConverged {
+        status = TightenStatus::InvalidStrip;
+    }
     let Some(path) = path else {
         return Tightened {
             surface_points: Vec::new(),

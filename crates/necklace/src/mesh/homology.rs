@@ -93,7 +93,11 @@ impl HomologyBasis {
                     if in_tree[e] || faces.len() != 2 {
                         continue;
                     }
-                    let g = if faces[0] as usize == f { faces[1] } else { faces[0] } as usize;
+                    let g = if faces[0] as usize == f {
+                        faces[1]
+                    } else {
+                        faces[0]
+                    } as usize;
                     if !seen[g] {
                         seen[g] = true;
                         in_cotree[e] = true;

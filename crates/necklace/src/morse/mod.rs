@@ -443,13 +443,9 @@ pub fn analyze_with_progress(
     let start = Instant::now();
     let scale_of = |step: usize| plan.get(step.wrapping_sub(1)).map(|p| p.scale);
     let (saddles, rejected) = match options.schedule {
-        Schedule::ScaleSpace => select_over_scales(
-            mesh,
-            &tracker.tracks,
-            &observations,
-            options,
-            &scale_of,
-        ),
+        Schedule::ScaleSpace => {
+            select_over_scales(mesh, &tracker.tracks, &observations, options, &scale_of)
+        }
         Schedule::Paper => {
             let min_persistence = options
                 .min_persistence
@@ -852,13 +848,14 @@ fn barcode(
                 } else {
                     scale_of(track.last_seen + 1)
                 },
-                cycle_closing: seen
-                    .iter()
-                    .any(|o| o.role.role == SaddleRole::CycleClosing),
+                cycle_closing: seen.iter().any(|o| o.role.role == SaddleRole::CycleClosing),
                 vertex: track.vertex,
-                selected: saddles
-                    .iter()
-                    .any(|s| s.born == track.born && seen.iter().any(|o| o.vertex == s.vertex && o.step == s.step)),
+                selected: saddles.iter().any(|s| {
+                    s.born == track.born
+                        && seen
+                            .iter()
+                            .any(|o| o.vertex == s.vertex && o.step == s.step)
+                }),
             }
         })
         .collect();

@@ -106,11 +106,8 @@ impl Sweep {
         let mut interior: Vec<u32> = (0..n as u32)
             .filter(|&v| self.kinds[v as usize] == VertexKind::Interior)
             .collect();
-        interior.par_sort_unstable_by(|&a, &b| {
-            f[b as usize]
-                .total_cmp(&f[a as usize])
-                .then(b.cmp(&a))
-        });
+        interior
+            .par_sort_unstable_by(|&a, &b| f[b as usize].total_cmp(&f[a as usize]).then(b.cmp(&a)));
         let outer = (0..n as u32).filter(|&v| self.kinds[v as usize] == VertexKind::Outer);
 
         let mut parent: Vec<u32> = (0..n as u32).collect();

@@ -325,6 +325,11 @@ pub struct SideReport {
     pub rejected: Vec<morse::RejectedSaddle>,
     /// Seconds per stage.
     pub timings: StageTimings,
+    /// The Z2 rank of this side's loops against the surface's genus: on a genus-g
+    /// surface, g independent handle loops and g tunnel loops make a homology basis.
+    pub homology: HomologyCheck,
+    /// Every 2-saddle track over scale (the barcode), with the selected ones marked.
+    pub bars: Vec<morse::Bar>,
     /// Every critical point alive at the last step, with type, selection and
     /// persistence (see [`critical_point_cloud`]); not in the JSON.
     #[serde(skip)]
@@ -333,6 +338,17 @@ pub struct SideReport {
     /// [`NeckOptions::keep_volume`]; not in the JSON.
     #[serde(skip)]
     pub field: Option<VolumeField>,
+}
+
+/// The rank of one side's loop classes against the genus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct HomologyCheck {
+    /// Total genus of the surface (`None` when a component's is undefined).
+    pub genus: Option<i64>,
+    /// Z2 rank of the classes of this side's loops.
+    pub rank: usize,
+    /// `rank == genus`.
+    pub ok: bool,
 }
 
 /// A volume mesh with a scalar per vertex.
@@ -468,8 +484,7 @@ pub fn find_necks_with_progress(
         let distance_seconds = start.elapsed().as_secs_f64();
         progress.finish();
         let morse_options = morse_options_for(&options.morse, &volume);
-        let result =
-            morse::analyze_with_progress(&volume.mesh, &field, &morse_options, progress)?;
+        let result = morse::analyze_with_progress(&volume.mesh, &field, &morse_options, progress)?;
         // The paper's schedule reproduces the paper's selection: no homology step.
         let loop_options = LoopOptions {
             homology_selection: options.loops.homology_selection
@@ -528,8 +543,31 @@ pub fn find_necks_with_progress(
                 }
                 d
             }));
+        let classes: Vec<Vec<u64>> = found.loops.iter().map(NeckLoop::class).collect();
+        let genus = surface_report
+            .component_details
+            .iter()
+            .map(|c| c.genus)
+            .sum::<Option<i64>>();
+        let rank = crate::mesh::z2_rank(&classes);
+        let homology = HomologyCheck {
+            genus,
+            rank,
+            ok: genus == Some(rank as i64),
+        };
+        if let Some(g) = genus.filter(|&g| g != rank as i64) {
+            report.warnings.push(format!(
+                "{name}: the {kind} loops have Z2 rank {rank}, the surface has genus {g}",
+                kind = match side {
+                    Side::Inside => "handle",
+                    Side::Outside => "tunnel",
+                }
+            ));
+        }
         report.loops.extend(found.loops);
         report.sides.push(SideReport {
+            homology,
+            bars: result.bars.clone(),
             side,
             volume: volume.report(),
             unknowns: result.unknowns,
