@@ -188,6 +188,8 @@ fn critical_json_has_the_documented_fields_and_writes_the_points() {
     let out = necklace(&[
         "critical",
         mesh.to_str().unwrap(),
+        "--schedule",
+        "paper",
         "--steps",
         "12",
         "--json",
