@@ -51,6 +51,18 @@ pub fn lerp(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
     ]
 }
 
+/// An orthonormal basis `(u, v)` of the plane with unit normal `n`.
+pub fn plane_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let helper = if n[0].abs() < 0.6 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let u = cross(n, helper);
+    let u = scale(u, 1.0 / norm(u));
+    (u, cross(n, u))
+}
+
 /// Closest point to `p` on the triangle `abc`, by its Voronoi regions (Ericson,
 /// *Real-Time Collision Detection*, 5.1.5). An interior closest point is the projection
 /// onto the plane; a zero-area triangle, or rounding that contradicts the regions, falls

@@ -139,29 +139,7 @@ impl TetMesh {
     /// Faces with exactly one tet, oriented with their normal pointing out of the mesh
     /// (counter-clockwise seen from outside).
     pub fn boundary_faces(&self) -> Vec<[u32; 3]> {
-        // The faces of a positively oriented tet (a, b, c, d), outward.
-        let mut faces: Vec<([u32; 3], [u32; 3])> = Vec::with_capacity(4 * self.tets.len());
-        for &[a, b, c, d] in &self.tets {
-            for f in [[b, c, d], [a, d, c], [a, b, d], [a, c, b]] {
-                let mut key = f;
-                key.sort_unstable();
-                faces.push((key, f));
-            }
-        }
-        faces.sort_unstable_by_key(|x| x.0);
-        let mut out = Vec::new();
-        let mut i = 0;
-        while i < faces.len() {
-            let mut j = i + 1;
-            while j < faces.len() && faces[j].0 == faces[i].0 {
-                j += 1;
-            }
-            if j - i == 1 {
-                out.push(faces[i].1);
-            }
-            i = j;
-        }
-        out
+        boundary_faces_of(self.tets.iter().copied())
     }
 
     /// Euler characteristic V − E + F − T over the vertices used by tets.
@@ -563,6 +541,34 @@ pub fn dihedral_angles_deg(p: [[f64; 3]; 4]) -> [f64; 6] {
         }
         (dot(n1, n2) / (a * b)).clamp(-1.0, 1.0).acos().to_degrees()
     })
+}
+
+/// The faces used by exactly one of `tets` (positively oriented), oriented outward,
+/// sorted by their vertex sets: the boundary of a mesh, or of a vertex's star.
+pub fn boundary_faces_of(tets: impl IntoIterator<Item = [u32; 4]>) -> Vec<[u32; 3]> {
+    // The faces of a positively oriented tet (a, b, c, d), outward.
+    let mut faces: Vec<([u32; 3], [u32; 3])> = Vec::new();
+    for [a, b, c, d] in tets {
+        for f in [[b, c, d], [a, d, c], [a, b, d], [a, c, b]] {
+            let mut key = f;
+            key.sort_unstable();
+            faces.push((key, f));
+        }
+    }
+    faces.sort_unstable_by_key(|x| x.0);
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < faces.len() {
+        let mut j = i + 1;
+        while j < faces.len() && faces[j].0 == faces[i].0 {
+            j += 1;
+        }
+        if j - i == 1 {
+            out.push(faces[i].1);
+        }
+        i = j;
+    }
+    out
 }
 
 #[cfg(test)]

@@ -13,14 +13,14 @@ use crate::mesh::{SurfaceMesh, Topology};
 
 use super::tighten::SurfacePoint;
 
-/// The edges a closed loop crosses (with repeats), and the face of each segment
-/// (`faces[i]` holds the segment from point `i` to point `i + 1`).
+/// The edges a closed loop crosses (with repeats).
 pub fn crossings(
     surface: &SurfaceMesh,
     topology: &Topology,
     points: &[SurfacePoint],
-) -> (Vec<usize>, Vec<usize>) {
+) -> Vec<usize> {
     let n = points.len();
+    // `faces[i]` holds the segment from point `i` to point `i + 1`.
     let faces: Vec<usize> = (0..n)
         .map(|i| segment_face(surface, topology, points[i], points[(i + 1) % n]))
         .collect();
@@ -41,7 +41,7 @@ pub fn crossings(
             }
         }
     }
-    (crossed, faces)
+    crossed
 }
 
 /// The areas of the two sides of a loop on its surface component, smaller first.

@@ -11,7 +11,8 @@
 //!
 //! Entry points: [`plane_cut`], [`loop_around`].
 
-use crate::geom::{cross, dot, lerp, norm, scale, sub};
+pub use crate::geom::plane_basis;
+use crate::geom::{dot, lerp, norm, sub};
 use crate::mesh::{SurfaceMesh, Topology};
 
 /// A plane through `origin` with unit `normal`.
@@ -172,18 +173,6 @@ fn walk(
         face = if ef[0] as usize == face { ef[1] } else { ef[0] } as usize;
         edge = next;
     }
-}
-
-/// An orthonormal basis `(u, v)` of the plane with normal `n`.
-pub fn plane_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-    let helper = if n[0].abs() < 0.6 {
-        [1.0, 0.0, 0.0]
-    } else {
-        [0.0, 1.0, 0.0]
-    };
-    let u = cross(n, helper);
-    let u = scale(u, 1.0 / norm(u));
-    (u, cross(n, u))
 }
 
 /// Signed area and whether `point` is inside, for a closed polygon in plane coordinates.

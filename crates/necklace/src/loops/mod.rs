@@ -325,10 +325,14 @@ pub fn find_loops_with_progress(
         .map(|seed| {
             let outcome =
                 loop_from_seed(surface, &topology, &geometry, seed, options).map(|tightened| {
-                    let (crossed, _) =
-                        classes::crossings(surface, &topology, &tightened.surface_points);
+                    let crossed = classes::crossings(surface, &topology, &tightened.surface_points);
+                    let class = basis.class_of_crossings(crossed.iter().copied());
+                    let areas = class.iter().all(|w| *w == 0).then(|| {
+                        classes::sides(surface, &topology, &tightened.surface_points, &crossed)
+                    });
                     Candidate {
-                        class: basis.class_of_crossings(crossed),
+                        class,
+                        areas: areas.flatten(),
                         tightened,
                     }
                 });
@@ -365,7 +369,7 @@ pub fn find_loops_with_progress(
     } else {
         candidates
     };
-    let mut loops = select(
+    let loops = select(
         surface,
         seeds,
         kind,
@@ -374,12 +378,6 @@ pub fn find_loops_with_progress(
         basis.len(),
         &mut dropped,
     );
-    for l in &mut loops {
-        if l.separating {
-            let (crossed, _) = classes::crossings(surface, &topology, &l.surface_points);
-            l.areas = classes::sides(surface, &topology, &l.surface_points, &crossed);
-        }
-    }
     dropped.sort_by_key(|d| d.seed);
     let selection = start.elapsed().as_secs_f64();
 
@@ -430,6 +428,8 @@ struct Candidate {
     tightened: Tightened,
     /// Its Z2 homology class.
     class: Vec<u64>,
+    /// When it separates the surface: the areas of its sides.
+    areas: Option<[f64; 2]>,
 }
 
 /// Keep one cycle-closing loop per independent homology class, shortest first; drop
@@ -570,7 +570,7 @@ fn select(
         let Candidate {
             tightened: t,
             class,
-            ..
+            areas,
         } = c;
         let center = centroid(&t.points);
         let duplicate_of = loops.iter().position(|l| {
@@ -615,7 +615,7 @@ fn select(
             bulge: seed.bulge,
             separating: class.iter().all(|w| *w == 0),
             homology: class_string(&class, basis_len),
-            areas: None,
+            areas,
             reason,
             tightening: TighteningReport {
                 status: t.status,

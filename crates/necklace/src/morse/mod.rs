@@ -205,6 +205,20 @@ pub struct Saddle {
     pub normal: [f64; 3],
 }
 
+impl Saddle {
+    /// This saddle, not selected after all, and why.
+    fn rejected(&self, reason: RejectReason) -> RejectedSaddle {
+        RejectedSaddle {
+            vertex: self.vertex,
+            position: self.position,
+            born: self.born,
+            birth_scale: self.birth_scale,
+            death_scale: self.death_scale,
+            reason,
+        }
+    }
+}
+
 /// Why a 2-saddle track was not selected.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "reason")]
@@ -708,14 +722,7 @@ fn select_over_scales(
             })
             .flatten();
         match same {
-            Some(k) => rejected.push(RejectedSaddle {
-                vertex: s.vertex,
-                position: s.position,
-                born: s.born,
-                birth_scale: s.birth_scale,
-                death_scale: s.death_scale,
-                reason: RejectReason::SameLobe { of: k.vertex },
-            }),
+            Some(k) => rejected.push(s.rejected(RejectReason::SameLobe { of: k.vertex })),
             None => by_lobe.push(s),
         }
     }
@@ -812,14 +819,7 @@ fn merge_close(
             .iter()
             .find(|k| norm(sub(k.position, s.position)) <= radius)
         {
-            Some(k) => rejected.push(RejectedSaddle {
-                vertex: s.vertex,
-                position: s.position,
-                born: s.born,
-                birth_scale: s.birth_scale,
-                death_scale: s.death_scale,
-                reason: RejectReason::Duplicate { of: k.vertex },
-            }),
+            Some(k) => rejected.push(s.rejected(RejectReason::Duplicate { of: k.vertex })),
             None => kept.push(s),
         }
     }

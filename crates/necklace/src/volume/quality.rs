@@ -18,7 +18,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::csr::Csr;
-use crate::geom::{add, cross, dot, norm, scale, sub};
+use crate::geom::{add, cross, dot, norm, plane_basis, scale, sub};
+use crate::tet::boundary_faces_of;
 
 /// How a vertex may move.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -225,15 +226,7 @@ fn tangent_directions(n: [f64; 3]) -> Vec<[f64; 3]> {
     if !(len > 0.0 && len.is_finite()) {
         return free_directions();
     }
-    let n = scale(n, 1.0 / len);
-    let helper = if n[0].abs() < 0.6 {
-        [1.0, 0.0, 0.0]
-    } else {
-        [0.0, 1.0, 0.0]
-    };
-    let u = cross(n, helper);
-    let u = scale(u, 1.0 / norm(u));
-    let w = cross(n, u);
+    let (u, w) = plane_basis(scale(n, 1.0 / len));
     (0..8)
         .map(|k| {
             let a = k as f64 * std::f64::consts::FRAC_PI_4;
@@ -245,32 +238,13 @@ fn tangent_directions(n: [f64; 3]) -> Vec<[f64; 3]> {
 /// The area-weighted normal of the boundary faces at `v` (faces of its star used by
 /// one tet of the star).
 fn boundary_normal(positions: &[[f64; 3]], tets: &[[u32; 4]], star: &[u32], v: u32) -> [f64; 3] {
-    let mut faces: Vec<([u32; 3], [u32; 3])> = Vec::new();
-    for &t in star {
-        let [a, b, c, d] = tets[t as usize];
-        for f in [[b, c, d], [a, d, c], [a, b, d], [a, c, b]] {
-            if f.contains(&v) {
-                let mut key = f;
-                key.sort_unstable();
-                faces.push((key, f));
-            }
-        }
-    }
-    faces.sort_unstable_by_key(|x| x.0);
-    let mut n = [0.0; 3];
-    let mut i = 0;
-    while i < faces.len() {
-        let mut j = i + 1;
-        while j < faces.len() && faces[j].0 == faces[i].0 {
-            j += 1;
-        }
-        if j - i == 1 {
-            let [a, b, c] = faces[i].1.map(|u| positions[u as usize]);
-            n = add(n, cross(sub(b, a), sub(c, a)));
-        }
-        i = j;
-    }
-    n
+    boundary_faces_of(star.iter().map(|&t| tets[t as usize]))
+        .into_iter()
+        .filter(|f| f.contains(&v))
+        .fold([0.0; 3], |n, f| {
+            let [a, b, c] = f.map(|u| positions[u as usize]);
+            add(n, cross(sub(b, a), sub(c, a)))
+        })
 }
 
 /// The quality of a tet: the sine of its smallest acute dihedral angle (an obtuse angle
