@@ -12,7 +12,8 @@
 //! - `critical.ply`: every critical point at the last smoothing step of each side, with
 //!   `type`, `selected`, `persistence`, `side` and colours (see
 //!   [`pipeline::critical_point_cloud`](crate::pipeline::critical_point_cloud));
-//! - `view.png` with a picture, `field.vtu` (volume meshes of both sides with the
+//! - `view.png` with a picture, and beside it `barcode.png`: one bar per 2-saddle track
+//!   of each side over scale, the necks in their kind's colour; `field.vtu` (volume meshes of both sides with the
 //!   smoothed field and the side per vertex, for ParaView) with the volume kept.
 //!
 //! Units: the input mesh's; coordinates in its frame. Entry points: [`write_run`],
@@ -197,6 +198,11 @@ pub fn write_run(
         let rendered = render::render(&loop_scene(surface, &curves, &saddles), picture)?;
         rendered.image.write_png(&path)?;
         written.push(path);
+        if let Some(image) = barcode_picture(report)? {
+            let path = dir.join("barcode.png");
+            image.write_png(&path)?;
+            written.push(path);
+        }
     }
 
     if options.volume {
@@ -206,6 +212,46 @@ pub fn write_run(
         written.push(path);
     }
     Ok(written)
+}
+
+/// The barcode of the scale space (`None` when no side has a bar, e.g. the paper's
+/// schedule, whose tracks have no scale).
+pub fn barcode_picture(report: &NeckReport) -> Result<Option<render::Image>> {
+    let panels: Vec<render::barcode::BarPanel> = report
+        .sides
+        .iter()
+        .filter(|s| s.bars.iter().any(|b| b.birth_scale > 0.0))
+        .map(|s| {
+            let (name, color) = match s.side {
+                Side::Inside => ("inside: handle necks in colour", HANDLE_COLOR),
+                Side::Outside => ("outside: tunnel necks in colour", TUNNEL_COLOR),
+            };
+            render::barcode::BarPanel {
+                title: format!("{name}, {} tracks", s.bars.len()),
+                color,
+                bars: s
+                    .bars
+                    .iter()
+                    .filter(|b| b.birth_scale > 0.0)
+                    .map(|b| render::barcode::BarSpan {
+                        birth: b.birth_scale,
+                        death: b.death_scale,
+                        highlight: b.selected,
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+    if panels.is_empty() {
+        return Ok(None);
+    }
+    // The right edge: the last scale any bar starts or ends at (alive bars reach it).
+    let max_scale = panels
+        .iter()
+        .flat_map(|p| p.bars.iter().flat_map(|b| [Some(b.birth), b.death]))
+        .flatten()
+        .fold(0.0, f64::max);
+    render::barcode::barcode(&panels, max_scale, 1000, 700).map(Some)
 }
 
 fn side_code(side: Side) -> f64 {

@@ -351,6 +351,104 @@ fn a_dumbbell_neck_loop_separates_the_surface_into_two_equal_halves() {
 }
 
 #[test]
+fn every_satellite_neck_is_found_at_its_radius_and_there_is_no_tunnel() {
+    let shape = Shape::new(ShapeKind::Satellites);
+    let r = necks(&shape, true, true);
+    assert!(of_kind(&r, LoopKind::Tunnel).is_empty(), "{:?}", r.dropped);
+    let mut handles = of_kind(&r, LoopKind::Handle);
+    handles.sort_by(|a, b| a.length.total_cmp(&b.length));
+    let expected = shape.expected_necks();
+    assert_eq!(handles.len(), expected.len(), "{:?}", r.dropped);
+    for (l, e) in handles.iter().zip(&expected) {
+        let length = e.length.unwrap();
+        assert!(
+            (l.length - length).abs() < 0.01 * length,
+            "{} vs {length}",
+            l.length
+        );
+        // Around its own neck, cutting a satellite off the body.
+        assert!(dist(l.center, e.center.unwrap()) < 0.25, "{:?}", l.center);
+        assert!(l.separating && l.bulge.unwrap() >= 1.5, "{l:?}");
+    }
+}
+
+#[test]
+fn shapes_without_a_narrow_part_have_no_loop() {
+    // An ellipsoid, a uniform capsule (every circle of its cylinder equally narrow) and
+    // a ball with a limb that tapers to its tip: nothing bulges beyond a narrow part.
+    for kind in [ShapeKind::Ellipsoid, ShapeKind::Capsule, ShapeKind::Limb] {
+        let r = necks(&Shape::new(kind), true, true);
+        assert!(r.loops.is_empty(), "{kind}: {:?}", r.loops);
+    }
+}
+
+#[test]
+fn a_buckyball_has_a_handle_per_stick_and_a_tunnel_per_window() {
+    let shape = Shape::new(ShapeKind::Buckyball);
+    let r = necks(&shape, true, true);
+    let handles = of_kind(&r, LoopKind::Handle);
+    let tunnels = of_kind(&r, LoopKind::Tunnel);
+    assert_eq!((handles.len(), tunnels.len()), (90, 32));
+    let stick = 2.0 * PI * shape.param("stick");
+    for l in &handles {
+        assert!((l.length - stick).abs() < 0.01 * stick, "{}", l.length);
+    }
+    // Each stick once: the loops' centres are the 90 edge midpoints.
+    let mut hit = vec![0; 90];
+    for l in &handles {
+        let nearest = shape
+            .expected_necks()
+            .iter()
+            .take(90)
+            .enumerate()
+            .min_by(|a, b| {
+                dist(a.1.center.unwrap(), l.center).total_cmp(&dist(b.1.center.unwrap(), l.center))
+            })
+            .unwrap()
+            .0;
+        hit[nearest] += 1;
+    }
+    assert!(hit.iter().all(|h| *h == 1), "{hit:?}");
+    let rank = |kind| {
+        let classes: Vec<Vec<u64>> = of_kind(&r, kind).iter().map(|l| l.class()).collect();
+        necklace::mesh::z2_rank(&classes)
+    };
+    assert_eq!((rank(LoopKind::Handle), rank(LoopKind::Tunnel)), (31, 31));
+    // A tunnel per window: 12 pentagons and 20 hexagons, told apart by their girth.
+    let mut lengths: Vec<f64> = tunnels.iter().map(|l| l.length).collect();
+    lengths.sort_by(f64::total_cmp);
+    let pentagons = lengths
+        .iter()
+        .filter(|l| **l < 0.5 * (lengths[0] + lengths[31]))
+        .count();
+    assert_eq!(pentagons, 12, "{lengths:?}");
+}
+
+#[test]
+fn the_whole_pipeline_gives_the_same_necks_with_one_and_two_threads() {
+    let mesh = Shape::new(ShapeKind::Satellites)
+        .with("res", 64.0)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| find_necks(&mesh, &NeckOptions::default()).unwrap())
+    };
+    let (a, b) = (run(1), run(2));
+    assert_eq!(a.loops, b.loops);
+    assert_eq!(a.dropped, b.dropped);
+    for (x, y) in a.sides.iter().zip(&b.sides) {
+        assert_eq!(x.saddles, y.saddles);
+        assert_eq!(x.rejected, y.rejected);
+        assert_eq!(x.bars, y.bars);
+    }
+}
+
+#[test]
 fn a_sphere_has_no_loop_inside_or_outside() {
     let r = necks(&Shape::new(ShapeKind::Sphere), true, true);
     assert!(r.loops.is_empty());

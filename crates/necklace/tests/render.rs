@@ -330,3 +330,36 @@ fn inward_facing_input_is_flipped_and_gives_the_same_loops() {
     assert_eq!(inward.loops.len(), outward.loops.len());
     assert!((inward.loops[0].length - outward.loops[0].length).abs() < 1e-9);
 }
+
+#[test]
+fn a_barcode_draws_necks_in_colour_and_other_tracks_in_grey() {
+    use necklace::render::barcode::{barcode, BarPanel, BarSpan};
+    let panel = BarPanel {
+        title: "inside".into(),
+        color: [213, 62, 30],
+        bars: vec![
+            BarSpan {
+                birth: 0.1,
+                death: None,
+                highlight: true,
+            },
+            BarSpan {
+                birth: 0.2,
+                death: Some(0.3),
+                highlight: false,
+            },
+        ],
+    };
+    let image = barcode(std::slice::from_ref(&panel), 1.0, 600, 400).unwrap();
+    let count = |c: [u8; 3]| image.pixels.iter().filter(|p| **p == c).count();
+    assert!(
+        count([213, 62, 30]) > 1000,
+        "the neck's bar is drawn in colour"
+    );
+    assert!(count([184, 184, 184]) > 100, "the other bar in grey");
+    assert!(barcode(std::slice::from_ref(&panel), f64::NAN, 600, 400).is_err());
+    assert!(barcode(&[], 1.0, 600, 400).is_err());
+    let mut bad = panel;
+    bad.bars[0].birth = -1.0;
+    assert!(barcode(&[bad], 1.0, 600, 400).is_err());
+}

@@ -101,7 +101,32 @@ fn expected_necks_follow_the_documented_formulas() {
             .filter(|n| n.kind == k)
             .count()
     };
-    assert_eq!((count(NeckKind::Handle), count(NeckKind::Tunnel)), (6, 4));
+    assert_eq!((count(NeckKind::Handle), count(NeckKind::Tunnel)), (4, 4));
+
+    let satellites = Shape::new(ShapeKind::Satellites);
+    let lengths: Vec<f64> = satellites
+        .expected_necks()
+        .iter()
+        .map(|n| n.length.unwrap())
+        .collect();
+    let radii = [0.12, 0.15, 0.18, 0.21];
+    assert_eq!(lengths.len(), 4);
+    for (l, r) in lengths.iter().zip(radii) {
+        assert!((l - 2.0 * PI * r).abs() < 1e-12);
+    }
+    let buckyball = Shape::new(ShapeKind::Buckyball);
+    let count = |k| {
+        buckyball
+            .expected_necks()
+            .iter()
+            .filter(|n| n.kind == k)
+            .count()
+    };
+    assert_eq!((count(NeckKind::Handle), count(NeckKind::Tunnel)), (90, 32));
+    assert_eq!(buckyball.genus(), 31);
+    for kind in [ShapeKind::Ellipsoid, ShapeKind::Capsule, ShapeKind::Limb] {
+        assert!(Shape::new(kind).expected_necks().is_empty());
+    }
 }
 
 #[test]
@@ -136,6 +161,16 @@ fn bad_parameters_are_rejected_with_a_message() {
         ("chain", &[("spacing", 0.5)], "overlap"),
         ("eight", &[("c", 0.5)], "between"),
         ("varying-torus", &[("a", 0.9), ("r0", 0.6)], "thickest"),
+        ("limb", &[("tip", 0.6)], "shrink"),
+        ("limb", &[("length", 1.0)], "inside the body"),
+        ("satellites", &[("distance", 1.2)], "touch the body"),
+        ("satellites", &[("step", 0.2)], "narrower than the balls"),
+        (
+            "satellites",
+            &[("count", 12.0), ("satellite", 0.5), ("step", 0.0)],
+            "overlap",
+        ),
+        ("buckyball", &[("stick", 0.3)], "stick"),
         ("sphere", &[("r", f64::NAN)], "outside"),
     ];
     for (name, params, needle) in cases {

@@ -69,8 +69,12 @@ pub struct Seed {
     /// Scale (length) at which the saddle appeared, and the first at which it was gone
     /// (`None`: alive at the largest); 0 and `None` when unknown.
     pub scales: (f64, Option<f64>),
-    /// Separating: how much fatter the lobe it cuts off is than the neck.
+    /// How much fatter the lobe it cuts off is than the neck, when it was separating
+    /// with a bulge that made it a neck (also for a cycle-closing saddle that was such
+    /// a neck at other levels).
     pub bulge: Option<f64>,
+    /// With `bulge`: an identifier of the lobe it cuts off (the maximum's track).
+    pub lobe: Option<usize>,
 }
 
 /// Options of [`find_loops`].
@@ -241,6 +245,15 @@ pub enum DropReason {
         /// Index of the kept loop with the same class, when the class is one loop's;
         /// `None` when it is a sum of several.
         of: Option<usize>,
+        /// Its own length.
+        length: f64,
+    },
+    /// A neck by its bulge whose loop cuts off the same lobe as a kept loop with a
+    /// larger bulge ratio, in the same homology class: the same neck seen at another
+    /// scale.
+    SameLobe {
+        /// Index of the seed kept.
+        of: usize,
         /// Its own length.
         length: f64,
     },
@@ -432,10 +445,12 @@ struct Candidate {
     areas: Option<[f64; 2]>,
 }
 
-/// Keep one cycle-closing loop per independent homology class, shortest first; drop
-/// those that separate the surface. Other candidates pass through (a separating
-/// saddle's loop may go around a cycle too, e.g. a neck on a handle: it was selected
-/// for its bulge, not for its cycle).
+/// One loop per neck. Cycle-closing loops: one per independent homology class, shortest
+/// first; those that separate the surface or repeat a class are dropped, unless the
+/// saddle is also a neck by its bulge (a stick of a ball-and-stick model closes a
+/// cycle at one scale and cuts off a ball at another). Necks by bulge: one per lobe
+/// and homology class, the largest bulge first (a separating saddle's loop may go
+/// around a cycle too, e.g. a stick between two balls on a cage).
 fn essential_cycles(
     seeds: &[Seed],
     kind: LoopKind,
@@ -445,14 +460,17 @@ fn essential_cycles(
     let (mut cycles, mut rest): (Vec<_>, Vec<_>) = candidates
         .into_iter()
         .partition(|(i, _)| seeds[*i].role == Some(Role::CycleClosing));
+    // Cycles that are not necks by shape claim the classes first: a neck by shape is
+    // kept anyway, so it should not take the class another cycle needs.
     cycles.sort_by(|(i, a), (j, b)| {
-        a.tightened
-            .length
-            .total_cmp(&b.tightened.length)
+        (seeds[*i].bulge.is_some())
+            .cmp(&seeds[*j].bulge.is_some())
+            .then(a.tightened.length.total_cmp(&b.tightened.length))
             .then(i.cmp(j))
     });
     let mut basis = Z2Basis::default();
     let mut kept: Vec<(usize, Vec<u64>)> = Vec::new();
+    let mut cycles_kept = Vec::new();
     for (i, c) in cycles {
         let length = c.tightened.length;
         let reason = if c.class.iter().all(|w| *w == 0) {
@@ -466,6 +484,7 @@ fn essential_cycles(
             })
         };
         match reason {
+            Some(_) if seeds[i].bulge.is_some() => rest.push((i, c)),
             Some(reason) => dropped.push(DroppedLoop {
                 kind,
                 seed: i,
@@ -475,11 +494,43 @@ fn essential_cycles(
             }),
             None => {
                 kept.push((i, c.class.clone()));
-                rest.push((i, c));
+                cycles_kept.push((i, c));
             }
         }
     }
-    rest
+    // Necks by bulge: one per (lobe, class), the largest bulge first.
+    rest.sort_by(|(i, _), (j, _)| {
+        let bulge = |k: usize| seeds[k].bulge.unwrap_or(f64::INFINITY);
+        bulge(*j).total_cmp(&bulge(*i)).then(i.cmp(j))
+    });
+    let mut by_lobe: Vec<(usize, usize, Vec<u64>)> = Vec::new();
+    for (i, c) in rest {
+        let same = seeds[i].lobe.and_then(|lobe| {
+            by_lobe
+                .iter()
+                .find(|(l, _, class)| *l == lobe && *class == c.class)
+                .map(|(_, j, _)| *j)
+        });
+        match same {
+            Some(of) => dropped.push(DroppedLoop {
+                kind,
+                seed: i,
+                saddle: seeds[i].position,
+                persistence: seeds[i].persistence,
+                reason: DropReason::SameLobe {
+                    of,
+                    length: c.tightened.length,
+                },
+            }),
+            None => {
+                if let Some(lobe) = seeds[i].lobe {
+                    by_lobe.push((lobe, i, c.class.clone()));
+                }
+                cycles_kept.push((i, c));
+            }
+        }
+    }
+    cycles_kept
 }
 
 /// Cut, choose, tighten.

@@ -24,18 +24,20 @@
 //!    ([`critical`]), check the Morse sum against the mesh's topology, track the
 //!    critical points from level to level ([`tracking`]), give every 2-saddle its
 //!    topological role by a superlevel sweep ([`roles`]: separating with a bulge ratio,
-//!    or cycle-closing) and fit its Hessian ([`hessian`]);
+//!    cycle-closing, or a local cycle: lattice noise) and fit its Hessian ([`hessian`]);
 //! 4. select. Scale space: a 2-saddle track is a neck candidate when it lives at least
 //!    `min_levels` levels, its Hessian has signature (−, −, +) at some level, and it is
-//!    cycle-closing at such a level (then that level is its *representative*: the
-//!    first), or separating with a bulge ratio of at least `min_bulge` (the level of the
-//!    largest ratio). Separating tracks that cut off the same lobe (the same maximum
-//!    track) are one neck: the largest bulge is kept. Paper: the 2-saddles alive at the
-//!    last step that survived `min_persistence` steps and pass the Hessian test. In
-//!    both, saddles closer than the matching radius are one neck (keep the most
-//!    persistent), and every 2-saddle track not kept is listed with the reason. Which
-//!    cycle-closing candidates are essential (one per independent cycle) is decided on
-//!    the surface, by the loops' homology classes (`loops`).
+//!    cycle-closing at such a level (then its *representative* level, where it is
+//!    placed, is its first fitted one, the least smoothed), or separating with a bulge ratio of at least `min_bulge` (the level of the
+//!    largest ratio); a track that only ever closes local cycles is noise. Each
+//!    candidate carries its largest passing bulge and the lobe (maximum track) it cuts
+//!    off there, also when it is cycle-closing at other levels. Paper: the 2-saddles
+//!    alive at the last step that survived `min_persistence` steps and pass the Hessian
+//!    test. In both, saddles closer than the matching radius are one neck (keep the
+//!    most persistent), and every 2-saddle track not kept is listed with the reason.
+//!    Which candidates are the same neck at another scale (the same cycle, or the same
+//!    lobe in the same class) is decided on the surface, by the loops' homology
+//!    classes (`loops`).
 //!
 //! Conventions: `L` is positive semidefinite (`l = −Δf`), `M` gives a quarter of each
 //! tet's volume to each of its vertices; lengths in the mesh's units; scales are `√t`;
@@ -154,6 +156,8 @@ pub struct StepSummary {
     pub separating: usize,
     /// 2-saddles that close a cycle.
     pub cycle_closing: usize,
+    /// 2-saddles that close a cycle within a few edges of themselves (lattice noise).
+    pub local_cycles: usize,
     /// Degenerate (monkey) saddles.
     pub monkeys: usize,
     /// Σ over interior vertices of `1 − χ(lower link)`.
@@ -178,7 +182,7 @@ pub struct Saddle {
     pub vertex_position: [f64; 3],
     /// The smoothed field there at its representative step.
     pub value: f64,
-    /// Its representative step: the one its position, normal and role are read at
+    /// Its representative step: the one its position and normal are read at
     /// (step `N` on the paper's schedule).
     pub step: usize,
     /// That step's scale `√t`.
@@ -192,12 +196,15 @@ pub struct Saddle {
     pub birth_scale: f64,
     /// Scale of the first level it is no longer seen at (`None`: alive at the largest).
     pub death_scale: Option<f64>,
-    /// What it does to the superlevel sets at its representative step.
+    /// What it does to the superlevel sets: cycle-closing if it is at any fitted level
+    /// (scale space), else separating; at step `N` on the paper's schedule.
     pub role: SaddleRole,
-    /// Separating: the largest bulge ratio over its life (`None` for cycle-closing, or
-    /// when the lobe is the outer sphere's).
+    /// The largest bulge ratio over the levels where it was separating: always for a
+    /// separating saddle (`None` when the lobe is the outer sphere's); for a
+    /// cycle-closing one only when it reaches `min_bulge` (it is then a neck by its
+    /// shape as well as a cycle).
     pub bulge: Option<f64>,
-    /// Separating: the track of the maximum of the lobe it cuts off.
+    /// With `bulge`: the track of the maximum of the lobe it cuts off at that level.
     pub lobe: Option<usize>,
     /// The fitted Hessian.
     pub hessian: Hessian,
@@ -235,17 +242,14 @@ pub enum RejectReason {
     },
     /// No quadratic could be fitted (too few neighbours).
     NoFit,
+    /// At every level where its Hessian fits, it closes only a cycle within a few
+    /// edges of itself, with no separating 2-saddle there: lattice noise.
+    LocalCycle,
     /// Separating, but the lobe it cuts off is not fatter than the neck by
     /// `min_bulge`: a bump on a tube, not a neck.
     LowBulge {
         /// Its largest bulge ratio.
         bulge: f64,
-    },
-    /// Separating, and another selected 2-saddle cuts off the same lobe with a larger
-    /// bulge ratio.
-    SameLobe {
-        /// Vertex of the 2-saddle kept.
-        of: u32,
     },
     /// Another selected 2-saddle lies within the matching radius: one neck seen at
     /// several vertices (a lattice splits a smooth saddle into a cluster of discrete
@@ -656,32 +660,43 @@ fn select_over_scales(
         let cycle = fitted
             .iter()
             .find(|(o, _)| o.role.role == SaddleRole::CycleClosing);
-        let largest_bulge = seen
+        // The separating level of the largest bulge (the outer sphere's lobe counts as
+        // infinitely fat), the earlier on ties.
+        let widest = fitted
             .iter()
-            .filter_map(|o| o.role.bulge)
-            .fold(None, |m: Option<f64>, b| Some(m.map_or(b, |m| m.max(b))));
-        let representative = match cycle {
-            Some(&(o, h)) => (o, h),
-            None => {
-                // Separating at every fitted level: the level of the largest bulge.
-                let &(o, h) = fitted
-                    .iter()
-                    .max_by(|a, b| {
-                        let bulge = |o: &Observation| o.role.bulge.unwrap_or(f64::INFINITY);
-                        bulge(a.0)
-                            .total_cmp(&bulge(b.0))
-                            .then(b.0.step.cmp(&a.0.step))
-                    })
-                    .unwrap_or(&fitted[0]);
-                let bulge = o.role.bulge.unwrap_or(f64::INFINITY);
+            .filter(|(o, _)| o.role.role == SaddleRole::Separating)
+            .max_by(|a, b| {
+                let bulge = |o: &Observation| o.role.bulge.unwrap_or(f64::INFINITY);
+                bulge(a.0)
+                    .total_cmp(&bulge(b.0))
+                    .then(b.0.step.cmp(&a.0.step))
+            });
+        let widest_bulge = widest.map(|(o, _)| o.role.bulge.unwrap_or(f64::INFINITY));
+        let (o, h, role) = match (cycle, widest) {
+            // Cycle-closing: placed at its first fitted level, the least smoothed
+            // (heat moves a window's saddle inwards as the scale grows).
+            (Some(_), _) => (fitted[0].0, fitted[0].1, SaddleRole::CycleClosing),
+            (None, None) => {
+                rejected.push(reject(&last, RejectReason::LocalCycle));
+                continue;
+            }
+            (None, Some(&(o, h))) => {
+                let bulge = widest_bulge.unwrap_or(f64::INFINITY);
                 if bulge < options.min_bulge {
                     rejected.push(reject(o, RejectReason::LowBulge { bulge }));
                     continue;
                 }
-                (o, h)
+                (o, h, SaddleRole::Separating)
             }
         };
-        let (o, h) = representative;
+        // A neck by its shape: separating, or cycle-closing and separating with a
+        // passing bulge at another level.
+        let necked = widest
+            .filter(|(w, _)| {
+                role == SaddleRole::Separating
+                    || w.role.bulge.is_some_and(|b| b >= options.min_bulge)
+            })
+            .map(|(w, _)| w);
         candidates.push(Saddle {
             vertex: o.vertex,
             position: newton_point(o.position, &h, o.radius),
@@ -693,40 +708,14 @@ fn select_over_scales(
             persistence: track.persistence(),
             birth_scale,
             death_scale,
-            role: o.role.role,
-            bulge: if o.role.role == SaddleRole::Separating {
-                largest_bulge
-            } else {
-                None
-            },
-            lobe: o.lobe,
+            role,
+            bulge: necked.and_then(|w| w.role.bulge),
+            lobe: necked.and_then(|w| w.lobe),
             hessian: h,
             normal: h.normal(),
         });
     }
-    // One neck per lobe: the largest bulge cuts it off.
-    candidates.sort_by(|a, b| {
-        let bulge = |s: &Saddle| s.bulge.unwrap_or(f64::INFINITY);
-        bulge(b)
-            .total_cmp(&bulge(a))
-            .then(b.persistence.cmp(&a.persistence))
-            .then(a.vertex.cmp(&b.vertex))
-    });
-    let mut by_lobe: Vec<Saddle> = Vec::new();
-    for s in candidates {
-        let same = (s.role == SaddleRole::Separating)
-            .then(|| {
-                by_lobe.iter().find(|k| {
-                    k.role == SaddleRole::Separating && k.lobe.is_some() && k.lobe == s.lobe
-                })
-            })
-            .flatten();
-        match same {
-            Some(k) => rejected.push(s.rejected(RejectReason::SameLobe { of: k.vertex })),
-            None => by_lobe.push(s),
-        }
-    }
-    let (kept, duplicates) = merge_close(mesh, by_lobe, options.track_radius);
+    let (kept, duplicates) = merge_close(mesh, candidates, options.track_radius);
     rejected.extend(duplicates);
     (kept, rejected)
 }
@@ -1042,15 +1031,13 @@ fn summarize(
     morse_expected: i64,
     events: StepEvents,
 ) -> StepSummary {
-    let cycle_closing = roles
-        .iter()
-        .filter(|r| r.role == SaddleRole::CycleClosing)
-        .count();
+    let count = |role| roles.iter().filter(|r| r.role == role).count();
     StepSummary {
         step,
         scale,
-        separating: roles.len() - cycle_closing,
-        cycle_closing,
+        separating: count(SaddleRole::Separating),
+        cycle_closing: count(SaddleRole::CycleClosing),
+        local_cycles: count(SaddleRole::LocalCycle),
         minima: c.count(VertexType::Minimum),
         maxima: c.count(VertexType::Maximum),
         saddles1: c.count(VertexType::Saddle1),

@@ -18,6 +18,15 @@
 //!   the superlevel set, a handle (inside) or a tunnel (outside) of the genus, or noise
 //!   that a 1-saddle fills again lower down.
 //!
+//! Noise cycles are told apart locally: if the two upper link components are joined
+//! inside the superlevel set within [`LOCAL_HOPS`] edges of `v` (without `v`), the cycle
+//! `v` closes lies in that small ball, far below the size of any handle or hole the
+//! lattice resolves. A lattice splits one smooth saddle into such clusters: at a
+//! satellite's neck, one vertex joins the two lobes and its neighbour closes a tiny
+//! cycle around it. Such a `v` takes the role of the nearest separating 2-saddle of the
+//! ball (same lobe, same bulge: the same neck), or is a *local cycle* when the ball has
+//! none.
+//!
 //! Entry points: [`Sweep::new`] once per mesh (vertex adjacency), then [`Sweep::roles`]
 //! per field. Sequential and sorted: the result does not depend on the thread count.
 
@@ -35,7 +44,13 @@ pub enum SaddleRole {
     Separating,
     /// Closes a cycle of one component: a handle (inside) or tunnel (outside).
     CycleClosing,
+    /// Closes a cycle that lies within [`LOCAL_HOPS`] edges of it, with no separating
+    /// 2-saddle there: lattice noise, never a neck.
+    LocalCycle,
 }
+
+/// Radius, in edges, of the ball in which a closed cycle counts as lattice noise.
+pub const LOCAL_HOPS: usize = 3;
 
 /// The role of one 2-saddle at one level.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -125,6 +140,9 @@ impl Sweep {
             }
         }
         let mut roles = Vec::new();
+        // Per vertex: its index in `roles` once it has one.
+        let mut role_of_vertex = vec![u32::MAX; n];
+        let mut ball = Ball::new(n);
         let mut roots: Vec<u32> = Vec::new();
         for &v in &interior {
             let vi = v as usize;
@@ -140,7 +158,26 @@ impl Sweep {
             roots.sort_unstable();
             roots.dedup();
             if classification.classes[vi].kind == VertexType::Saddle2 {
-                roles.push(self.role_of(v, f, distance, &roots, &top, &fattest));
+                let mut role = self.role_of(v, f, distance, &roots, &top, &fattest);
+                if role.role == SaddleRole::CycleClosing {
+                    if let Some(local) = ball.local_cycle(self, v, &added) {
+                        role = local
+                            .iter()
+                            .map(|&u| role_of_vertex[u as usize])
+                            .filter(|&i| i != u32::MAX)
+                            .map(|i| roles[i as usize])
+                            .find(|r: &RoleAt| r.role == SaddleRole::Separating)
+                            .map_or(
+                                RoleAt {
+                                    role: SaddleRole::LocalCycle,
+                                    ..role
+                                },
+                                |r| RoleAt { vertex: v, ..r },
+                            );
+                    }
+                }
+                role_of_vertex[vi] = roles.len() as u32;
+                roles.push(role);
             }
             // Union: the component with the highest top survives as the root.
             let mut root = v;
@@ -215,6 +252,80 @@ impl Sweep {
             field_ratio: (younger != OUTER && f[v as usize] > 0.0)
                 .then(|| f[younger as usize] / f[v as usize]),
         }
+    }
+}
+
+/// Scratch space for the local-cycle test, reused across saddles (stamped marks).
+struct Ball {
+    stamp: u32,
+    in_ball: Vec<u32>,
+    reached: Vec<u32>,
+    order: Vec<u32>,
+    queue: Vec<u32>,
+}
+
+impl Ball {
+    fn new(n: usize) -> Ball {
+        Ball {
+            stamp: 0,
+            in_ball: vec![0; n],
+            reached: vec![0; n],
+            order: Vec::new(),
+            queue: Vec::new(),
+        }
+    }
+
+    /// If the superlevel set minus `v` joins all of `v`'s added neighbours within
+    /// [`LOCAL_HOPS`] edges of `v`: the ball's vertices in breadth-first order from `v`
+    /// (nearest first). Otherwise `None`: the cycle `v` closes leaves the ball.
+    fn local_cycle(&mut self, sweep: &Sweep, v: u32, added: &[bool]) -> Option<&[u32]> {
+        self.stamp += 1;
+        let stamp = self.stamp;
+        let around = |u: u32| {
+            let u = u as usize;
+            &sweep.neighbours[sweep.start[u]..sweep.start[u + 1]]
+        };
+        // The ball: vertices within LOCAL_HOPS edges, breadth first.
+        self.order.clear();
+        self.order.push(v);
+        self.in_ball[v as usize] = stamp;
+        let mut head = 0;
+        for _ in 0..LOCAL_HOPS {
+            let end = self.order.len();
+            while head < end {
+                let u = self.order[head];
+                head += 1;
+                for &w in around(u) {
+                    if self.in_ball[w as usize] != stamp {
+                        self.in_ball[w as usize] = stamp;
+                        self.order.push(w);
+                    }
+                }
+            }
+        }
+        // Flood the ball's superlevel vertices from one upper neighbour of v.
+        let upper: Vec<u32> = around(v)
+            .iter()
+            .copied()
+            .filter(|&u| added[u as usize])
+            .collect();
+        let first = *upper.first()?;
+        self.queue.clear();
+        self.queue.push(first);
+        self.reached[first as usize] = stamp;
+        while let Some(u) = self.queue.pop() {
+            for &w in around(u) {
+                let wi = w as usize;
+                if w != v && added[wi] && self.in_ball[wi] == stamp && self.reached[wi] != stamp {
+                    self.reached[wi] = stamp;
+                    self.queue.push(w);
+                }
+            }
+        }
+        upper
+            .iter()
+            .all(|&u| self.reached[u as usize] == stamp)
+            .then_some(&self.order[1..])
     }
 }
 

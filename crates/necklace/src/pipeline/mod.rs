@@ -402,12 +402,15 @@ pub fn loop_seeds(result: &MorseResult) -> Vec<Seed> {
             position: s.position,
             normal: s.normal,
             persistence: s.persistence,
-            role: Some(match s.role {
-                SaddleRole::Separating => Role::Separating,
-                SaddleRole::CycleClosing => Role::CycleClosing,
-            }),
+            role: match s.role {
+                SaddleRole::Separating => Some(Role::Separating),
+                SaddleRole::CycleClosing => Some(Role::CycleClosing),
+                // Only the paper schedule selects these (it ignores roles).
+                SaddleRole::LocalCycle => None,
+            },
             scales: (s.birth_scale, s.death_scale),
             bulge: s.bulge,
+            lobe: s.lobe,
         })
         .collect()
 }

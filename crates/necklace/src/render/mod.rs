@@ -16,6 +16,7 @@
 //! its [`Projection`], so callers can find where a world point landed);
 //! [`Image::write_png`] encodes it.
 
+pub mod barcode;
 pub mod chart;
 mod font;
 mod raster;

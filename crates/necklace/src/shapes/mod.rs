@@ -31,6 +31,13 @@ use crate::mesh::SurfaceMesh;
 pub enum ShapeKind {
     /// A ball: genus 0, no neck.
     Sphere,
+    /// An ellipsoid: genus 0, no neck.
+    Ellipsoid,
+    /// A capsule (a cylinder with round ends): genus 0, no neck although every
+    /// circle of the cylinder is equally narrow.
+    Capsule,
+    /// A ball with a tapering cone limb: genus 0, no neck (the limb never bulges).
+    Limb,
     /// A round torus: genus 1.
     Torus,
     /// A torus whose tube radius varies around the ring: a well-defined thin side.
@@ -43,6 +50,11 @@ pub enum ShapeKind {
     Eight,
     /// A row of merged tori: genus g.
     Pretzel,
+    /// A body ball with satellite balls on necks of different radii: genus 0.
+    Satellites,
+    /// Ball-and-stick truncated icosahedron: balls on its 60 vertices, sticks on its
+    /// 90 edges; genus 31.
+    Buckyball,
 }
 
 /// A named numeric parameter of a shape, with its default and allowed range.
@@ -103,6 +115,130 @@ const SPHERE: &[ParamSpec] = &[
     real("r", 1.0, 1e-6, 1e6, "radius"),
     whole("res", 24.0, 4.0, 1000.0, RES_DOC),
 ];
+const ELLIPSOID: &[ParamSpec] = &[
+    real("a", 1.0, 1e-6, 1e6, "semi-axis along x"),
+    real("b", 0.7, 1e-6, 1e6, "semi-axis along y"),
+    real("c", 0.5, 1e-6, 1e6, "semi-axis along z"),
+    whole("res", 48.0, 4.0, 1000.0, RES_DOC),
+];
+const CAPSULE: &[ParamSpec] = &[
+    real(
+        "length",
+        2.0,
+        0.0,
+        1e6,
+        "length of the cylinder between the round ends",
+    ),
+    real("r", 0.4, 1e-6, 1e6, "radius"),
+    whole("res", 64.0, 4.0, 1000.0, RES_DOC),
+];
+const LIMB: &[ParamSpec] = &[
+    real(
+        "body",
+        1.0,
+        1e-6,
+        1e6,
+        "radius of the body ball, centred at the origin",
+    ),
+    real(
+        "base",
+        0.5,
+        1e-6,
+        1e6,
+        "radius of the limb's base ball, at the origin (< body)",
+    ),
+    real(
+        "tip",
+        0.15,
+        1e-6,
+        1e6,
+        "radius of the limb's tip ball (< base)",
+    ),
+    real(
+        "length",
+        2.5,
+        1e-6,
+        1e6,
+        "the tip ball is centred at x = length (> body + tip)",
+    ),
+    real("blend", 0.1, 0.0, 1e6, BLEND_DOC),
+    whole("res", 96.0, 4.0, 1000.0, RES_DOC),
+];
+const SATELLITES: &[ParamSpec] = &[
+    whole(
+        "count",
+        4.0,
+        1.0,
+        12.0,
+        "number of satellites, evenly around the z axis in the xy-plane",
+    ),
+    real(
+        "body",
+        1.0,
+        1e-6,
+        1e6,
+        "radius of the body ball, centred at the origin",
+    ),
+    real(
+        "satellite",
+        0.45,
+        1e-6,
+        1e6,
+        "radius of each satellite ball",
+    ),
+    real(
+        "distance",
+        1.9,
+        1e-6,
+        1e6,
+        "distance of the satellite centres from the origin (> body + satellite)",
+    ),
+    real(
+        "neck",
+        0.12,
+        1e-6,
+        1e6,
+        "radius of the first satellite's neck (at 0.3 rad from +x)",
+    ),
+    real(
+        "step",
+        0.03,
+        0.0,
+        1e6,
+        "each next satellite's neck (counter-clockwise) is this much wider",
+    ),
+    real("blend", 0.05, 0.0, 1e6, BLEND_DOC),
+    whole("res", 128.0, 4.0, 1000.0, RES_DOC),
+];
+const BUCKYBALL: &[ParamSpec] = &[
+    real(
+        "edge",
+        1.0,
+        1e-6,
+        1e6,
+        "edge length of the truncated icosahedron",
+    ),
+    real(
+        "ball",
+        0.25,
+        1e-6,
+        1e6,
+        "radius of the balls on its vertices (< edge/2)",
+    ),
+    real(
+        "stick",
+        0.1,
+        1e-6,
+        1e6,
+        "radius of the sticks on its edges (< ball)",
+    ),
+    real("blend", 0.03, 0.0, 1e6, BLEND_DOC),
+    whole("res", 120.0, 4.0, 1000.0, RES_DOC),
+];
+/// Angle of the first satellite from +x, in radians. Off the lattice axes so that no
+/// neck cylinder runs along a lattice direction, where marching tetrahedra's projected
+/// vertices can line up on one ruling and fold a sliver over its neighbour.
+const SATELLITE_START: f64 = 0.3;
 const TORUS: &[ParamSpec] = &[
     real("R", 1.0, 1e-6, 1e6, "radius of the core circle"),
     real("r", 0.3, 1e-6, 1e6, "tube radius (< R)"),
@@ -195,26 +331,36 @@ const PRETZEL: &[ParamSpec] = &[
 
 impl ShapeKind {
     /// Every shape, in documentation order.
-    pub const ALL: [ShapeKind; 7] = [
+    pub const ALL: [ShapeKind; 12] = [
         ShapeKind::Sphere,
+        ShapeKind::Ellipsoid,
+        ShapeKind::Capsule,
+        ShapeKind::Limb,
         ShapeKind::Torus,
         ShapeKind::VaryingTorus,
         ShapeKind::Dumbbell,
         ShapeKind::Chain,
         ShapeKind::Eight,
         ShapeKind::Pretzel,
+        ShapeKind::Satellites,
+        ShapeKind::Buckyball,
     ];
 
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {
             ShapeKind::Sphere => "sphere",
+            ShapeKind::Ellipsoid => "ellipsoid",
+            ShapeKind::Capsule => "capsule",
+            ShapeKind::Limb => "limb",
             ShapeKind::Torus => "torus",
             ShapeKind::VaryingTorus => "varying-torus",
             ShapeKind::Dumbbell => "dumbbell",
             ShapeKind::Chain => "chain",
             ShapeKind::Eight => "eight",
             ShapeKind::Pretzel => "pretzel",
+            ShapeKind::Satellites => "satellites",
+            ShapeKind::Buckyball => "buckyball",
         }
     }
 
@@ -236,12 +382,17 @@ impl ShapeKind {
     pub fn params(self) -> &'static [ParamSpec] {
         match self {
             ShapeKind::Sphere => SPHERE,
+            ShapeKind::Ellipsoid => ELLIPSOID,
+            ShapeKind::Capsule => CAPSULE,
+            ShapeKind::Limb => LIMB,
             ShapeKind::Torus => TORUS,
             ShapeKind::VaryingTorus => VARYING_TORUS,
             ShapeKind::Dumbbell => DUMBBELL,
             ShapeKind::Chain => CHAIN,
             ShapeKind::Eight => EIGHT,
             ShapeKind::Pretzel => PRETZEL,
+            ShapeKind::Satellites => SATELLITES,
+            ShapeKind::Buckyball => BUCKYBALL,
         }
     }
 
@@ -249,6 +400,15 @@ impl ShapeKind {
     pub fn description(self) -> &'static str {
         match self {
             ShapeKind::Sphere => "ball of radius r; genus 0, no neck inside or outside",
+            ShapeKind::Ellipsoid => "ellipsoid with semi-axes a, b, c; genus 0, no neck",
+            ShapeKind::Capsule => {
+                "cylinder of radius r and the given length with round ends; genus 0; no neck: \
+                 the cylinder is uniform, nothing bulges beyond it"
+            }
+            ShapeKind::Limb => {
+                "body ball with a round cone limb tapering from base to tip; genus 0; no neck: \
+                 the limb thins monotonically, so nothing bulges beyond a narrow part"
+            }
             ShapeKind::Torus => {
                 "round torus; genus 1; handle: every meridian (length 2πr) is equally narrow \
                  (degenerate); tunnel: the inner equator, length 2π(R − r)"
@@ -270,9 +430,18 @@ impl ShapeKind {
                  2πr, at the far side of each ring by symmetry) and two tunnels (one per hole)"
             }
             ShapeKind::Pretzel => {
-                "g tori of tube radius r merged in a row; genus g; handles of length 2πr (one at \
-                 the far side of each end ring, two at ±y on each middle ring: 2g − 2 for \
-                 g ≥ 2) and g tunnels (one per hole)"
+                "g tori of tube radius r merged in a row; genus g; g handles of length 2πr (one \
+                 per ring: at the far side of each end ring, at +y or −y on a middle ring) and \
+                 g tunnels (one per hole)"
+            }
+            ShapeKind::Satellites => {
+                "body ball with count satellite balls on necks of radii neck + i step; genus 0; \
+                 one handle per neck, length 2π(neck + i step), no tunnel"
+            }
+            ShapeKind::Buckyball => {
+                "balls on the 60 vertices and sticks on the 90 edges of a truncated \
+                 icosahedron; genus 31; 90 handles (one per stick, length 2π stick) and 32 \
+                 tunnels (one per pentagon or hexagon window)"
             }
         }
     }
@@ -395,7 +564,50 @@ impl Shape {
         let p = |n| self.param(n);
         let fail = |msg: String| Err(Error::invalid_argument(format!("{}: {msg}", self.kind)));
         match self.kind {
-            ShapeKind::Sphere => Ok(()),
+            ShapeKind::Sphere | ShapeKind::Ellipsoid | ShapeKind::Capsule => Ok(()),
+            ShapeKind::Limb if !(p("tip") < p("base") && p("base") < p("body")) => fail(format!(
+                "radii must shrink from body = {} to base = {} to tip = {}",
+                p("body"),
+                p("base"),
+                p("tip")
+            )),
+            ShapeKind::Limb if p("length") <= p("body") + p("tip") => fail(format!(
+                "length = {} must exceed body + tip = {} (the tip would lie inside the body)",
+                p("length"),
+                p("body") + p("tip")
+            )),
+            ShapeKind::Satellites if p("distance") <= p("body") + p("satellite") => fail(format!(
+                "distance = {} must exceed body + satellite = {} (a satellite would touch the body)",
+                p("distance"),
+                p("body") + p("satellite")
+            )),
+            ShapeKind::Satellites if self.satellite_necks().last().copied().unwrap_or(0.0)
+                >= p("satellite").min(p("body")) =>
+            {
+                fail(format!(
+                    "the widest neck, {}, must be narrower than the balls",
+                    self.satellite_necks().last().copied().unwrap_or(0.0)
+                ))
+            }
+            ShapeKind::Satellites
+                if p("count") > 1.0
+                    && 2.0 * p("distance") * (PI / p("count")).sin() <= 2.0 * p("satellite") =>
+            {
+                fail(format!(
+                    "{} satellites of radius {} overlap at distance {}",
+                    p("count"),
+                    p("satellite"),
+                    p("distance")
+                ))
+            }
+            ShapeKind::Buckyball if !(p("stick") < p("ball") && p("ball") < 0.5 * p("edge")) => {
+                fail(format!(
+                    "need stick = {} < ball = {} < edge/2 = {}",
+                    p("stick"),
+                    p("ball"),
+                    0.5 * p("edge")
+                ))
+            }
             ShapeKind::Torus | ShapeKind::Eight | ShapeKind::Pretzel if p("r") >= p("R") => {
                 fail(format!("tube radius r = {} must be < R = {}", p("r"), p("R")))
             }
@@ -434,7 +646,14 @@ impl Shape {
     /// Genus of the surface.
     pub fn genus(&self) -> usize {
         match self.kind {
-            ShapeKind::Sphere | ShapeKind::Dumbbell | ShapeKind::Chain => 0,
+            ShapeKind::Sphere
+            | ShapeKind::Ellipsoid
+            | ShapeKind::Capsule
+            | ShapeKind::Limb
+            | ShapeKind::Dumbbell
+            | ShapeKind::Chain
+            | ShapeKind::Satellites => 0,
+            ShapeKind::Buckyball => 31,
             ShapeKind::Torus | ShapeKind::VaryingTorus => 1,
             ShapeKind::Eight => 2,
             ShapeKind::Pretzel => self.param("g") as usize,
@@ -472,11 +691,96 @@ impl Shape {
             .collect()
     }
 
+    /// Neck radii of the satellites, in order around the z axis from +x.
+    fn satellite_necks(&self) -> Vec<f64> {
+        let n = self.param("count") as usize;
+        (0..n)
+            .map(|i| self.param("neck") + i as f64 * self.param("step"))
+            .collect()
+    }
+
+    /// Unit directions of the satellites, evenly around the z axis from the angle
+    /// [`SATELLITE_START`] off +x.
+    fn satellite_directions(&self) -> Vec<[f64; 3]> {
+        let n = self.param("count") as usize;
+        (0..n)
+            .map(|i| {
+                let a = SATELLITE_START + 2.0 * PI * i as f64 / n as f64;
+                [a.cos(), a.sin(), 0.0]
+            })
+            .collect()
+    }
+
     /// The signed distance function (negative inside).
     pub fn sdf(&self, p: [f64; 3]) -> f64 {
         let o = [0.0; 3];
         match self.kind {
             ShapeKind::Sphere => sdf::ball(p, o, self.param("r")),
+            ShapeKind::Ellipsoid => {
+                sdf::ellipsoid(p, [self.param("a"), self.param("b"), self.param("c")])
+            }
+            ShapeKind::Capsule => {
+                let half = 0.5 * self.param("length");
+                sdf::capsule(p, [-half, 0.0, 0.0], [half, 0.0, 0.0], self.param("r"))
+            }
+            ShapeKind::Limb => {
+                let tip = [self.param("length"), 0.0, 0.0];
+                let cone = sdf::round_cone(p, o, tip, self.param("base"), self.param("tip"));
+                sdf::smooth_union(
+                    sdf::ball(p, o, self.param("body")),
+                    cone,
+                    self.param("blend"),
+                )
+            }
+            ShapeKind::Satellites => {
+                let (k, dist, sat) = (
+                    self.param("blend"),
+                    self.param("distance"),
+                    self.param("satellite"),
+                );
+                let mut d = sdf::ball(p, o, self.param("body"));
+                for (dir, neck) in self
+                    .satellite_directions()
+                    .iter()
+                    .zip(self.satellite_necks())
+                {
+                    let c = scale3(*dir, dist);
+                    d = sdf::smooth_union(d, sdf::capsule(p, o, c, neck), k);
+                    d = sdf::smooth_union(d, sdf::ball(p, c, sat), k);
+                }
+                d
+            }
+            ShapeKind::Buckyball => {
+                // In units of the edge length, where the skeleton is computed once.
+                let e = self.param("edge");
+                let (ball, stick, k) = (
+                    self.param("ball") / e,
+                    self.param("stick") / e,
+                    self.param("blend") / e,
+                );
+                let p = scale3(p, 1.0 / e);
+                let (vertices, edges) = unit_truncated_icosahedron();
+                // Only parts within reach can change the value: skip the rest.
+                let reach = 1.0 + ball + k;
+                let near: Vec<bool> = vertices.iter().map(|v| dist3(p, *v) < reach).collect();
+                let mut d = f64::INFINITY;
+                for (v, _) in vertices.iter().zip(&near).filter(|(_, n)| **n) {
+                    d = sdf::smooth_union(d, sdf::ball(p, *v, ball), k);
+                }
+                for [a, b] in edges.iter().filter(|[a, b]| near[*a] || near[*b]) {
+                    d = sdf::smooth_union(d, sdf::capsule(p, vertices[*a], vertices[*b], stick), k);
+                }
+                let d = if d.is_finite() {
+                    d
+                } else {
+                    // Far from every part: the distance to the nearest ball bounds it.
+                    vertices
+                        .iter()
+                        .map(|v| sdf::ball(p, *v, ball))
+                        .fold(f64::INFINITY, f64::min)
+                };
+                d * e
+            }
             ShapeKind::Torus => {
                 let r = self.param("r");
                 sdf::torus(p, o, self.param("R"), |_| r)
@@ -514,6 +818,29 @@ impl Shape {
     pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
         let half = match self.kind {
             ShapeKind::Sphere => [self.param("r"); 3],
+            ShapeKind::Ellipsoid => [self.param("a"), self.param("b"), self.param("c")],
+            ShapeKind::Capsule => {
+                let r = self.param("r");
+                [0.5 * self.param("length") + r, r, r]
+            }
+            ShapeKind::Limb => {
+                let body = self.param("body");
+                let x = body.max(self.param("length") + self.param("tip"));
+                // Symmetric in x so the shape stays centred on the box's middle.
+                [x, body, body]
+            }
+            ShapeKind::Satellites => {
+                let xy = self.param("distance") + self.param("satellite");
+                [xy, xy, self.param("body")]
+            }
+            ShapeKind::Buckyball => {
+                let (vertices, _) = unit_truncated_icosahedron();
+                let r = vertices
+                    .iter()
+                    .map(|v| dist3(*v, [0.0; 3]))
+                    .fold(0.0, f64::max);
+                [r * self.param("edge") + self.param("ball"); 3]
+            }
             ShapeKind::Torus => {
                 let (big_r, r) = (self.param("R"), self.param("r"));
                 [big_r + r, big_r + r, r]
@@ -551,7 +878,47 @@ impl Shape {
             note,
         };
         match self.kind {
-            ShapeKind::Sphere => Vec::new(),
+            ShapeKind::Sphere | ShapeKind::Ellipsoid | ShapeKind::Capsule | ShapeKind::Limb => {
+                Vec::new()
+            }
+            ShapeKind::Satellites => {
+                let (body, dist, sat) = (
+                    self.param("body"),
+                    self.param("distance"),
+                    self.param("satellite"),
+                );
+                let mid = 0.5 * (body + dist - sat);
+                self.satellite_directions()
+                    .iter()
+                    .zip(self.satellite_necks())
+                    .map(|(dir, neck)| {
+                        handle(
+                            Some(2.0 * PI * neck),
+                            Some(scale3(*dir, mid)),
+                            "circle of the satellite's neck, between body and satellite",
+                        )
+                    })
+                    .collect()
+            }
+            ShapeKind::Buckyball => {
+                let (vertices, edges) = unit_truncated_icosahedron();
+                let (e, stick) = (self.param("edge"), self.param("stick"));
+                let mut necks: Vec<ExpectedNeck> = edges
+                    .iter()
+                    .map(|[a, b]| {
+                        let (a, b) = (vertices[*a], vertices[*b]);
+                        handle(
+                            Some(2.0 * PI * stick),
+                            Some([0, 1, 2].map(|k| 0.5 * e * (a[k] + b[k]))),
+                            "circle of a stick, midway between its balls",
+                        )
+                    })
+                    .collect();
+                necks.extend(
+                    (0..32).map(|_| tunnel(None, None, "around a pentagon or hexagon window")),
+                );
+                necks
+            }
             ShapeKind::Torus => {
                 let (big_r, r) = (self.param("R"), self.param("r"));
                 vec![
@@ -610,8 +977,8 @@ impl Shape {
                     } else if i == n - 1 {
                         necks.push(handle(length, Some([c[0] + big_r, 0.0, 0.0]), note));
                     } else {
-                        necks.push(handle(length, Some([c[0], big_r, 0.0]), note));
-                        necks.push(handle(length, Some([c[0], -big_r, 0.0]), note));
+                        let note = "meridian circle at +y or −y: the two are the same cycle";
+                        necks.push(handle(length, None, note));
                     }
                 }
                 for c in &centres {
@@ -634,5 +1001,87 @@ impl Shape {
         let lo = lo.map(|x| x - pad);
         let hi = hi.map(|x| x + pad);
         Ok(marching::mesh_level_set(&|p| self.sdf(p), lo, hi, h))
+    }
+}
+
+fn scale3(v: [f64; 3], s: f64) -> [f64; 3] {
+    v.map(|x| x * s)
+}
+
+fn dist3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Vertices and edges of a polyhedron.
+type Skeleton = (Vec<[f64; 3]>, Vec<[usize; 2]>);
+
+/// [`truncated_icosahedron`] with unit edges, computed once.
+fn unit_truncated_icosahedron() -> &'static Skeleton {
+    static SKELETON: std::sync::OnceLock<Skeleton> = std::sync::OnceLock::new();
+    SKELETON.get_or_init(|| truncated_icosahedron(1.0))
+}
+
+/// The 60 vertices and 90 edges of a truncated icosahedron with the given edge length,
+/// centred at the origin.
+///
+/// With golden ratio φ and edge length 2, the vertices are the even permutations of
+/// (0, ±1, ±3φ), (±1, ±(2 + φ), ±2φ) and (±φ, ±2, ±φ³) (φ³ = 2φ + 1); the edges join
+/// the vertex pairs at distance 2.
+fn truncated_icosahedron(edge: f64) -> Skeleton {
+    let phi = (1.0 + 5f64.sqrt()) / 2.0;
+    let s = 0.5 * edge;
+    let mut vertices = Vec::with_capacity(60);
+    for base in [
+        [0.0, 1.0, 3.0 * phi],
+        [1.0, 2.0 + phi, 2.0 * phi],
+        [phi, 2.0, 2.0 * phi + 1.0],
+    ] {
+        for signs in 0..8 {
+            let v: [f64; 3] = std::array::from_fn(|k| {
+                if signs & (1 << k) != 0 {
+                    -base[k]
+                } else {
+                    base[k]
+                }
+            });
+            // A sign flip of a zero coordinate gives the same point.
+            if (0..3).any(|k| base[k] == 0.0 && signs & (1 << k) != 0) {
+                continue;
+            }
+            for shift in 0..3 {
+                vertices.push([v[shift] * s, v[(shift + 1) % 3] * s, v[(shift + 2) % 3] * s]);
+            }
+        }
+    }
+    let mut edges = Vec::with_capacity(90);
+    for i in 0..vertices.len() {
+        for j in i + 1..vertices.len() {
+            if (dist3(vertices[i], vertices[j]) - edge).abs() < 1e-6 * edge {
+                edges.push([i, j]);
+            }
+        }
+    }
+    (vertices, edges)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_truncated_icosahedron_has_60_vertices_90_edges_and_degree_3() {
+        let (vertices, edges) = truncated_icosahedron(1.0);
+        assert_eq!((vertices.len(), edges.len()), (60, 90));
+        let mut degree = [0; 60];
+        for [a, b] in &edges {
+            degree[*a] += 1;
+            degree[*b] += 1;
+        }
+        assert!(degree.iter().all(|d| *d == 3));
+        // Circumradius of the unit-edge truncated icosahedron: √(58 + 18√5) / 4.
+        let r = (58.0 + 18.0 * 5f64.sqrt()).sqrt() / 4.0;
+        assert!(vertices
+            .iter()
+            .all(|v| (dist3(*v, [0.0; 3]) - r).abs() < 1e-12));
     }
 }

@@ -26,6 +26,38 @@ pub(crate) fn torus(p: [f64; 3], c: [f64; 3], big_r: f64, tube: impl Fn(f64) -> 
     (q[0] * q[0] + q[1] * q[1]).sqrt() - tube(theta)
 }
 
+/// Ellipsoid with semi-axes `r` along x, y, z around the origin. The zero set is exact;
+/// the value is the scaled-sphere bound (|p/r| − 1)·min(r), a close approximation.
+pub(crate) fn ellipsoid(p: [f64; 3], r: [f64; 3]) -> f64 {
+    let q = [p[0] / r[0], p[1] / r[1], p[2] / r[2]];
+    (norm(q) - 1.0) * r[0].min(r[1]).min(r[2])
+}
+
+/// Round cone: the convex hull of the balls (`a`, `ra`) and (`b`, `rb`), `|ra − rb| < |b − a|`.
+///
+/// In the half-plane through the axis, with u along `a → b` and v ≥ 0 away from it, the
+/// lateral line touches both circles; its outward normal is n = (sin α, cos α) with
+/// sin α = (ra − rb)/L. A point whose coordinate along the line's direction
+/// (cos α, −sin α) falls before the tangent point on `a` (at 0) is nearest to ball `a`,
+/// one past the tangent point on `b` (at L cos α) to ball `b`, and any other to the line.
+pub(crate) fn round_cone(p: [f64; 3], a: [f64; 3], b: [f64; 3], ra: f64, rb: f64) -> f64 {
+    let axis = sub(b, a);
+    let length = norm(axis);
+    let d = sub(p, a);
+    let u = dot(d, axis) / length;
+    let v = (dot(d, d) - u * u).max(0.0).sqrt();
+    let sin = (ra - rb) / length;
+    let cos = (1.0 - sin * sin).sqrt();
+    let along = u * cos - v * sin;
+    if along < 0.0 {
+        (u * u + v * v).sqrt() - ra
+    } else if along > length * cos {
+        ((u - length) * (u - length) + v * v).sqrt() - rb
+    } else {
+        u * sin + v * cos - ra
+    }
+}
+
 /// Polynomial smooth minimum with blend width `k` (plain `min` for `k = 0`). It differs
 /// from `min(a, b)` only where `|a − b| < k`, by at most `k/4`.
 pub(crate) fn smooth_union(a: f64, b: f64, k: f64) -> f64 {
@@ -50,6 +82,17 @@ mod tests {
         assert!((torus([1.0, 0.0, 0.0], [0.0; 3], 1.0, |_| 0.3) + 0.3).abs() < 1e-15);
         assert!((torus([0.0, 0.0, 0.0], [0.0; 3], 1.0, |_| 0.3) - 0.7).abs() < 1e-15);
         assert_eq!(smooth_union(0.0, 5.0, 0.1), 0.0);
+        assert!((ellipsoid([0.0, 0.0, 0.5], [2.0, 1.0, 0.5])).abs() < 1e-15);
+        assert!((ellipsoid([2.0, 0.0, 0.0], [2.0, 1.0, 0.5])).abs() < 1e-15);
+        // A round cone from (0, r 1) to (4, r 0.5): the ends are balls, the side a line.
+        let (a, b) = ([0.0; 3], [4.0, 0.0, 0.0]);
+        assert!((round_cone([-3.0, 0.0, 0.0], a, b, 1.0, 0.5) - 2.0).abs() < 1e-15);
+        assert!((round_cone([6.0, 0.0, 0.0], a, b, 1.0, 0.5) - 1.5).abs() < 1e-15);
+        assert!((round_cone([2.0, 0.0, 0.0], a, b, 1.0, 0.5) + 0.75).abs() < 1e-12);
+        // Equal radii: a capsule.
+        for q in [[1.0, 0.7, 0.2], [-0.5, 0.1, 0.0], [5.0, -1.0, 2.0]] {
+            assert!((round_cone(q, a, b, 0.3, 0.3) - capsule(q, a, b, 0.3)).abs() < 1e-12);
+        }
         assert!(smooth_union(0.0, 0.0, 0.1) < 0.0);
     }
 }
