@@ -196,9 +196,9 @@ struct MethodArgs {
     /// Scale space: classified levels.
     #[arg(long, default_value_t = 32)]
     levels: usize,
-    /// Scale space: smallest bulge ratio (lobe's field maximum / field at the saddle)
-    /// of a neck that cuts off a part.
-    #[arg(long, default_value_t = 1.5)]
+    /// Scale space: smallest bulge ratio (the lobe's largest inscribed radius / the
+    /// neck's) of a neck that cuts off a part.
+    #[arg(long, default_value_t = 1.3)]
     min_bulge: f64,
     /// Scale space: levels a saddle must live to be a neck.
     #[arg(long, default_value_t = 3)]

@@ -5,7 +5,11 @@
 //! 1. [`cut`]: intersect the plane through the saddle with the input surface and keep the
 //!    closed curve around the saddle (the smallest in-plane polygon containing it).
 //!    Optionally ("lower link variation") try a few normals tilted around the given one
-//!    and keep the shortest such curve.
+//!    and keep the shortest such curve. Where no curve of the plane through the saddle
+//!    goes around it (a window of a curved lattice: the saddle sits below the wires' rim,
+//!    and the plane passes under them), parallel planes up to
+//!    [`LoopOptions::plane_offsets`] steps of [`LoopOptions::offset_step`] × diagonal
+//!    away are tried, nearest first (+ before −), for a curve around the saddle's axis.
 //! 2. [`tighten`](mod@tighten): shorten it into a closed geodesic, not tied to mesh edges. A loop that
 //!    collapses (slides off a cap) or does not settle is dropped with its reason.
 //! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; merge
@@ -97,6 +101,12 @@ pub struct LoopOptions {
     /// the shortest first, and drop cycle-closing loops that separate it (their cycle
     /// is filled again lower down: noise). Default true.
     pub homology_selection: bool,
+    /// When no curve of the plane through the saddle goes around it: how many parallel
+    /// planes to try on each side. Default 4.
+    pub plane_offsets: usize,
+    /// Spacing of those planes, × the bounding-box diagonal. Default 0.005 (so up to
+    /// 2 % of the diagonal away).
+    pub offset_step: f64,
 }
 
 impl Default for LoopOptions {
@@ -109,6 +119,8 @@ impl Default for LoopOptions {
             merge_distance: 0.01,
             merge_length: 0.02,
             homology_selection: true,
+            plane_offsets: 4,
+            offset_step: 0.005,
         }
     }
 }
@@ -126,6 +138,9 @@ pub struct NeckLoop {
     pub length: f64,
     /// Length of the plane-cut loop it started from.
     pub initial_length: f64,
+    /// Signed distance along the cutting normal from the saddle to the plane that gave
+    /// that loop: 0 unless the plane through the saddle had no curve around it.
+    pub plane_offset: f64,
     /// Length-weighted centroid of the polyline.
     pub center: [f64; 3],
     /// Unit normal of the best-fit plane (least squares), oriented so that the loop
@@ -200,10 +215,14 @@ pub struct TighteningReport {
 pub enum DropReason {
     /// No closed cut curve contains the saddle's projection.
     NoLoopAroundSaddle {
-        /// Closed curves the plane cut had.
+        /// Closed curves the plane through the saddle had.
         closed_curves: usize,
         /// Open curves (the surface has a boundary there).
         open_curves: usize,
+        /// Parallel planes also tried, on each side ([`LoopOptions::plane_offsets`]).
+        offsets_tried: usize,
+        /// Their spacing, in the surface's units.
+        offset_step: f64,
     },
     /// The loop kept shrinking: it slid off a cap and is not a neck.
     Collapsed {
@@ -336,8 +355,8 @@ pub fn find_loops_with_progress(
     let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
         .par_iter()
         .map(|seed| {
-            let outcome =
-                loop_from_seed(surface, &topology, &geometry, seed, options).map(|tightened| {
+            let outcome = loop_from_seed(surface, &topology, &geometry, seed, options).map(
+                |(tightened, offset)| {
                     let crossed = classes::crossings(surface, &topology, &tightened.surface_points);
                     let class = basis.class_of_crossings(crossed.iter().copied());
                     let areas = class.iter().all(|w| *w == 0).then(|| {
@@ -347,8 +366,10 @@ pub fn find_loops_with_progress(
                         class,
                         areas: areas.flatten(),
                         tightened,
+                        offset,
                     }
-                });
+                },
+            );
             progress.advance(1);
             outcome
         })
@@ -422,6 +443,7 @@ fn check_inputs(surface: &SurfaceMesh, seeds: &[Seed], options: &LoopOptions) ->
     let positive = [
         options.max_length,
         options.merge_length,
+        options.offset_step,
         t.min_length_ratio,
         t.angle_tolerance,
     ];
@@ -439,6 +461,8 @@ fn check_inputs(surface: &SurfaceMesh, seeds: &[Seed], options: &LoopOptions) ->
 /// A tightened loop before selection.
 struct Candidate {
     tightened: Tightened,
+    /// The cutting plane's offset from the saddle.
+    offset: f64,
     /// Its Z2 homology class.
     class: Vec<u64>,
     /// When it separates the surface: the areas of its sides.
@@ -533,14 +557,14 @@ fn essential_cycles(
     cycles_kept
 }
 
-/// Cut, choose, tighten.
+/// Cut, choose, tighten; also the offset of the plane that gave the loop.
 fn loop_from_seed(
     surface: &SurfaceMesh,
     topology: &Topology,
     geometry: &SurfaceGeometry,
     seed: &Seed,
     options: &LoopOptions,
-) -> std::result::Result<Tightened, DropReason> {
+) -> std::result::Result<(Tightened, f64), DropReason> {
     let n = scale(seed.normal, 1.0 / norm(seed.normal));
     let mut normals = vec![n];
     let (u, v) = plane_basis(n);
@@ -552,20 +576,51 @@ fn loop_from_seed(
         normals.push(add(scale(n, a.cos()), scale(dir, a.sin())));
     }
 
-    // The shortest closed curve around the saddle over the normals tried.
+    // The plane through the saddle first, then parallel ones nearest first.
+    let step = options.offset_step * surface.bbox_diagonal();
+    let offsets = std::iter::once(0.0)
+        .chain((1..=options.plane_offsets).flat_map(|j| [j as f64 * step, -(j as f64) * step]));
+    let (mut closed, mut open) = (0, 0);
+    for offset in offsets {
+        let point = add(seed.position, scale(n, offset));
+        let best = around_point(surface, topology, &normals, point);
+        if offset == 0.0 {
+            (closed, open) = (best.1, best.2);
+        }
+        if let Some((_, curve)) = best.0 {
+            let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
+            return tightened(t).map(|t| (t, offset));
+        }
+    }
+    Err(DropReason::NoLoopAroundSaddle {
+        closed_curves: closed,
+        open_curves: open,
+        offsets_tried: options.plane_offsets,
+        offset_step: step,
+    })
+}
+
+/// The shortest closed curve around `point` over the planes through it with these
+/// normals, and the closed and open curve counts of the first plane.
+fn around_point(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    normals: &[[f64; 3]],
+    point: [f64; 3],
+) -> (Option<(f64, cut::CutCurve)>, usize, usize) {
     let mut best: Option<(f64, cut::CutCurve)> = None;
     let (mut closed, mut open) = (0, 0);
-    for normal in normals {
+    for (j, &normal) in normals.iter().enumerate() {
         let plane = Plane {
-            origin: seed.position,
+            origin: point,
             normal,
         };
         let mut curves = plane_cut(surface, topology, &plane);
-        if best.is_none() {
+        if j == 0 {
             closed = curves.iter().filter(|c| c.closed).count();
             open = curves.len() - closed;
         }
-        if let Some(i) = loop_around(surface, topology, &plane, &curves, seed.position) {
+        if let Some(i) = loop_around(surface, topology, &plane, &curves, point) {
             let curve = curves.swap_remove(i);
             let length = closed_length(&curve.points(surface, topology));
             if best.as_ref().is_none_or(|(l, _)| length < *l) {
@@ -573,14 +628,11 @@ fn loop_from_seed(
             }
         }
     }
-    let Some((_, curve)) = best else {
-        return Err(DropReason::NoLoopAroundSaddle {
-            closed_curves: closed,
-            open_curves: open,
-        });
-    };
+    (best, closed, open)
+}
 
-    let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
+/// A tightened loop, or why it is dropped.
+fn tightened(t: Tightened) -> std::result::Result<Tightened, DropReason> {
     match t.status {
         TightenStatus::Converged | TightenStatus::Stalled if !t.simple => {
             Err(DropReason::NotSimple { length: t.length })
@@ -620,6 +672,7 @@ fn select(
     for (i, c) in candidates {
         let Candidate {
             tightened: t,
+            offset,
             class,
             areas,
         } = c;
@@ -678,6 +731,7 @@ fn select(
             },
             length: t.length,
             initial_length: t.initial_length,
+            plane_offset: offset,
             points: t.points,
             surface_points: t.surface_points,
         });

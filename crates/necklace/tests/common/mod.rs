@@ -78,3 +78,23 @@ impl Domain for Shell {
         (self.1 / 8.0).max(h)
     }
 }
+
+/// The same surface with every triangle split in four at its edge midpoints (the same
+/// shape, four times the triangles).
+pub fn split_in_four(mesh: &necklace::SurfaceMesh) -> necklace::SurfaceMesh {
+    let mut positions = mesh.positions.clone();
+    let mut midpoints = std::collections::HashMap::new();
+    let mut midpoint = |a: u32, b: u32| {
+        *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+            let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+            positions.push([0, 1, 2].map(|i| 0.5 * (p[i] + q[i])));
+            (positions.len() - 1) as u32
+        })
+    };
+    let mut triangles = Vec::with_capacity(4 * mesh.triangles.len());
+    for &[a, b, c] in &mesh.triangles {
+        let (ab, bc, ca) = (midpoint(a, b), midpoint(b, c), midpoint(c, a));
+        triangles.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+    }
+    necklace::SurfaceMesh::new(positions, triangles).unwrap()
+}
