@@ -118,11 +118,12 @@ impl Sweep {
         distance: &[f64],
     ) -> Vec<RoleAt> {
         let n = self.kinds.len();
-        let mut interior: Vec<u32> = (0..n as u32)
+        // Sorted by decreasing (f, index), the keys beside the indices (no indirection).
+        let mut interior: Vec<(f64, u32)> = (0..n as u32)
             .filter(|&v| self.kinds[v as usize] == VertexKind::Interior)
+            .map(|v| (f[v as usize], v))
             .collect();
-        interior
-            .par_sort_unstable_by(|&a, &b| f[b as usize].total_cmp(&f[a as usize]).then(b.cmp(&a)));
+        interior.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
         let outer = (0..n as u32).filter(|&v| self.kinds[v as usize] == VertexKind::Outer);
 
         let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -144,19 +145,29 @@ impl Sweep {
         let mut role_of_vertex = vec![u32::MAX; n];
         let mut ball = Ball::new(n);
         let mut roots: Vec<u32> = Vec::new();
-        for &v in &interior {
+        for &(_, v) in &interior {
             let vi = v as usize;
             added[vi] = true;
             top[vi] = v;
             fattest[vi] = distance[vi];
             roots.clear();
-            for &u in &self.neighbours[self.start[vi]..self.start[vi + 1]] {
-                if added[u as usize] && u != v {
+            let mut upper = self.neighbours[self.start[vi]..self.start[vi + 1]]
+                .iter()
+                .filter(|&&u| added[u as usize] && u != v);
+            if matches!(
+                classification.classes[vi].kind,
+                VertexType::Saddle2 | VertexType::Degenerate
+            ) {
+                for &u in upper {
                     roots.push(find(&mut parent, u));
                 }
+                roots.sort_unstable();
+                roots.dedup();
+            } else if let Some(&u) = upper.next() {
+                // One upper link component (regular, 1-saddle, minimum): its vertices
+                // are joined through the link's edges already, so one root is all.
+                roots.push(find(&mut parent, u));
             }
-            roots.sort_unstable();
-            roots.dedup();
             if classification.classes[vi].kind == VertexType::Saddle2 {
                 let mut role = self.role_of(v, f, distance, &roots, &top, &fattest);
                 if role.role == SaddleRole::CycleClosing {
