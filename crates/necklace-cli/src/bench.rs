@@ -9,6 +9,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use necklace::morse::{MorseOptions, Schedule};
 use necklace::pipeline::{self, find_necks_with_progress, NeckOptions, NeckReport, VolumeOptions};
 use necklace::render::chart::{chart, Chart, Series};
 use necklace::{io, SurfaceMesh};
@@ -94,8 +95,18 @@ fn model_name(path: &Path) -> String {
         .map_or(String::new(), |n| n.to_string_lossy().into_owned())
 }
 
-fn run_one(surface: &SurfaceMesh, handles: bool, h: Option<f64>, ui: &Ui) -> Result<NeckReport> {
+fn run_one(
+    surface: &SurfaceMesh,
+    handles: bool,
+    h: Option<f64>,
+    schedule: Schedule,
+    ui: &Ui,
+) -> Result<NeckReport> {
     let options = NeckOptions {
+        morse: MorseOptions {
+            schedule,
+            ..MorseOptions::default()
+        },
         handles,
         tunnels: !handles,
         volume: VolumeOptions {
@@ -111,6 +122,7 @@ pub fn run(
     dir: &Path,
     csv: Option<&Path>,
     scaling: Option<Option<String>>,
+    schedule: Schedule,
     ui: &Ui,
 ) -> Result<String> {
     let files = io::mesh_files(dir)?;
@@ -122,9 +134,13 @@ pub fn run(
         .into());
     }
     print_now(&format!(
-        "necklace bench: {} models, {} threads, default settings (h = diagonal / 64, 20 steps)",
+        "necklace bench: {} models, {} threads, default settings (h = diagonal / 64), {}",
         files.len(),
-        available_threads()
+        available_threads(),
+        match schedule {
+            Schedule::ScaleSpace => "scale space (32 levels)",
+            Schedule::Paper => "the paper's schedule (20 steps)",
+        }
     ));
     print_now(HEADER);
     let mut csv_text = format!("{CSV_HEADER}\n");
@@ -139,7 +155,7 @@ pub fn run(
             }
         };
         for (mode, handles) in [("handles", true), ("tunnels", false)] {
-            match run_one(&surface, handles, None, ui) {
+            match run_one(&surface, handles, None, schedule, ui) {
                 Ok(report) => {
                     let row = Row::new(&name, mode, &surface, &report);
                     if row.seconds[4] > slowest.0 {
@@ -159,7 +175,7 @@ pub fn run(
         let _ = writeln!(out, "table -> {}", path.display());
     }
     if let Some(model) = scaling {
-        out += &h_series(&files, model.as_deref(), csv, ui)?;
+        out += &h_series(&files, model.as_deref(), csv, schedule, ui)?;
     }
     Ok(out)
 }
@@ -169,7 +185,13 @@ fn available_threads() -> usize {
 }
 
 /// The h series on one model (inside), written as CSV and PNG.
-fn h_series(files: &[PathBuf], model: Option<&str>, csv: Option<&Path>, ui: &Ui) -> Result<String> {
+fn h_series(
+    files: &[PathBuf],
+    model: Option<&str>,
+    csv: Option<&Path>,
+    schedule: Schedule,
+    ui: &Ui,
+) -> Result<String> {
     let wanted = model.unwrap_or("bunny");
     let file = files
         .iter()
@@ -204,7 +226,7 @@ fn h_series(files: &[PathBuf], model: Option<&str>, csv: Option<&Path>, ui: &Ui)
     })
     .collect();
     for k in H_SERIES {
-        let report = run_one(&surface, true, Some(diagonal / k), ui)?;
+        let report = run_one(&surface, true, Some(diagonal / k), schedule, ui)?;
         let row = Row::new(&name, "handles", &surface, &report);
         let s = row.seconds;
         print_now(&format!(

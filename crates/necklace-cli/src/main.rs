@@ -167,10 +167,15 @@ enum Command {
         /// Skip the h series.
         #[arg(long)]
         no_scaling: bool,
+        /// Smoothing schedule: `scales` (default) or `paper` (20 steps), to compare
+        /// the two in one build.
+        #[arg(long, value_enum, default_value_t = ScheduleArg::Scales)]
+        schedule: ScheduleArg,
     },
     /// Generate an analytic test shape with known necks and write it as a mesh.
     Shape {
-        /// sphere, torus, varying-torus, dumbbell, chain, eight or pretzel.
+        /// One of `necklace shape --list` (sphere, ellipsoid, capsule, limb, torus,
+        /// varying-torus, dumbbell, chain, satellites, eight, pretzel, buckyball).
         #[arg(required_unless_present = "list")]
         name: Option<String>,
         /// A shape parameter, `name=value` (repeatable); `--list` shows them.
@@ -198,7 +203,7 @@ struct MethodArgs {
     levels: usize,
     /// Scale space: smallest bulge ratio (the lobe's largest inscribed radius / the
     /// neck's) of a neck that cuts off a part.
-    #[arg(long, default_value_t = 1.3)]
+    #[arg(long, default_value_t = 1.5)]
     min_bulge: f64,
     /// Scale space: levels a saddle must live to be a neck.
     #[arg(long, default_value_t = 3)]
@@ -230,10 +235,7 @@ impl MethodArgs {
 
     fn morse(&self) -> MorseOptions {
         MorseOptions {
-            schedule: match self.schedule {
-                ScheduleArg::Scales => Schedule::ScaleSpace,
-                ScheduleArg::Paper => Schedule::Paper,
-            },
+            schedule: self.schedule.into(),
             levels: self.levels,
             min_bulge: self.min_bulge,
             min_levels: self.min_levels,
@@ -248,6 +250,15 @@ impl MethodArgs {
 enum ScheduleArg {
     Scales,
     Paper,
+}
+
+impl From<ScheduleArg> for Schedule {
+    fn from(s: ScheduleArg) -> Schedule {
+        match s {
+            ScheduleArg::Scales => Schedule::ScaleSpace,
+            ScheduleArg::Paper => Schedule::Paper,
+        }
+    }
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -385,7 +396,14 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             csv,
             scaling,
             no_scaling,
-        } => bench::run(&dir, csv.as_deref(), (!no_scaling).then_some(scaling), ui),
+            schedule,
+        } => bench::run(
+            &dir,
+            csv.as_deref(),
+            (!no_scaling).then_some(scaling),
+            schedule.into(),
+            ui,
+        ),
         Command::Shape {
             name,
             params,

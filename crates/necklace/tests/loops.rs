@@ -19,11 +19,24 @@ use necklace::SurfaceMesh;
 /// A closed surface of revolution about z: radius `r(z)` for z in [-h, h], with a pole
 /// at each end; `rings` latitude rings, `segments` vertices per ring.
 fn revolution(r: impl Fn(f64) -> f64, h: f64, rings: usize, segments: usize) -> SurfaceMesh {
+    wavy_revolution(r, h, rings, segments, 0.0)
+}
+
+/// [`revolution`] with each ring's vertices moved along the profile by up to `wave` ×
+/// the ring spacing (a wave round the ring): still on the surface, but no plane
+/// normal to the axis runs along a ring.
+fn wavy_revolution(
+    r: impl Fn(f64) -> f64,
+    h: f64,
+    rings: usize,
+    segments: usize,
+    wave: f64,
+) -> SurfaceMesh {
     let mut positions = vec![[0.0, 0.0, -h]];
     for i in 1..rings {
-        let z = -h + 2.0 * h * i as f64 / rings as f64;
         for j in 0..segments {
             let a = 2.0 * PI * j as f64 / segments as f64;
+            let z = -h + 2.0 * h * (i as f64 + wave * (3.0 * a + i as f64).sin()) / rings as f64;
             positions.push([r(z) * a.cos(), r(z) * a.sin(), z]);
         }
     }
@@ -556,6 +569,50 @@ fn where_the_plane_through_the_saddle_misses_a_parallel_plane_gives_the_loop() {
 }
 
 #[test]
+fn a_cycle_loop_slides_to_the_narrower_of_two_waists() {
+    // Waists at z = ±0.05 (radii 0.2675 below, 0.2725 above) with a bump between them:
+    // each is a closed geodesic that tightening alone keeps.
+    let profile = |z: f64| {
+        let r = 0.3 + 0.03 * (2.0 * PI * z / 0.1).cos() + 0.05 * z;
+        r * (1.0 - z.powi(8)).max(0.0).sqrt()
+    };
+    let mesh = wavy_revolution(profile, 1.0, 400, 96, 0.4);
+    let seeds = [Seed {
+        position: [0.0, 0.0, 0.05],
+        normal: [0.0, 0.0, 1.0],
+        persistence: 5,
+        role: Some(necklace::loops::Role::CycleClosing),
+        ..Seed::default()
+    }];
+    // The surface is a sphere: its loops separate, so no homology selection here.
+    let options = LoopOptions {
+        homology_selection: false,
+        ..LoopOptions::default()
+    };
+    let stuck = LoopOptions {
+        slide_steps: 0,
+        ..options
+    };
+    let ring = |r: f64| 2.0 * PI * r;
+    let upper = find_loops(&mesh, &seeds, LoopKind::Handle, &stuck).unwrap();
+    assert_eq!(upper.loops.len(), 1, "{:?}", upper.dropped);
+    assert!(
+        (upper.loops[0].length - ring(0.2725)).abs() < 0.005 * ring(0.2725),
+        "{}",
+        upper.loops[0].length
+    );
+    let slid = find_loops(&mesh, &seeds, LoopKind::Handle, &options).unwrap();
+    assert_eq!(slid.loops.len(), 1, "{:?}", slid.dropped);
+    let l = &slid.loops[0];
+    assert!(
+        (l.length - ring(0.2675)).abs() < 0.005 * ring(0.2675),
+        "{}",
+        l.length
+    );
+    assert!(l.plane_offset < -0.05 && l.center[2] < 0.0, "{l:?}");
+}
+
+#[test]
 fn plane_cuts_through_vertices_still_give_closed_curves() {
     // The revolution mesh has whole rings of vertices exactly on z = ±k·h.
     let mesh = revolution(waist, 1.0, 20, 16);
@@ -666,36 +723,41 @@ fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
 }
 
 #[test]
-fn the_kitten_split_in_four_has_the_same_necks() {
-    let file = common::meshes_dir().join("kitten.off");
-    if !file.exists() {
-        println!("SKIPPED: no {}", file.display());
-        return;
-    }
-    let mesh = necklace::io::read_mesh(&file).unwrap();
-    let (mesh, _, _) = necklace::pipeline::orient_for_volume(mesh);
-    let fine = common::split_in_four(&mesh);
-    assert_eq!(fine.triangles.len(), 4 * mesh.triangles.len());
-    let (coarse, fine) = (
-        find_necks(&mesh, &NeckOptions::default()).unwrap(),
-        find_necks(&fine, &NeckOptions::default()).unwrap(),
-    );
-    let lengths = |r: &NeckReport, kind: LoopKind| {
-        let mut l: Vec<f64> = of_kind(r, kind).iter().map(|l| l.length).collect();
-        l.sort_by(f64::total_cmp);
-        l
-    };
-    for kind in [LoopKind::Handle, LoopKind::Tunnel] {
-        let (a, b) = (lengths(&coarse, kind), lengths(&fine, kind));
-        // The paper's kitten: the tail and the neck; one tunnel.
-        let expected = if kind == LoopKind::Handle { 2 } else { 1 };
-        assert_eq!(
-            (a.len(), b.len()),
-            (expected, expected),
-            "{kind:?}: {a:?} vs {b:?}"
+fn the_kitten_and_the_botijo_split_in_four_have_the_same_necks() {
+    // The paper's figures: the kitten's tail and neck and its one tunnel; the botijo's
+    // five handles and five tunnels.
+    for (name, handles, tunnels) in [("kitten.off", 2, 1), ("botijo.obj", 5, 5)] {
+        let file = common::meshes_dir().join(name);
+        if !file.exists() {
+            println!("SKIPPED: no {}", file.display());
+            return;
+        }
+        let mesh = necklace::io::read_mesh(&file).unwrap();
+        let (mesh, _, _) = necklace::pipeline::orient_for_volume(mesh);
+        let fine = common::split_in_four(&mesh);
+        assert_eq!(fine.triangles.len(), 4 * mesh.triangles.len());
+        let (coarse, fine) = (
+            find_necks(&mesh, &NeckOptions::default()).unwrap(),
+            find_necks(&fine, &NeckOptions::default()).unwrap(),
         );
-        for (x, y) in a.iter().zip(&b) {
-            assert!((x - y).abs() <= 0.005 * x, "{kind:?}: {a:?} vs {b:?}");
+        let lengths = |r: &NeckReport, kind: LoopKind| {
+            let mut l: Vec<f64> = of_kind(r, kind).iter().map(|l| l.length).collect();
+            l.sort_by(f64::total_cmp);
+            l
+        };
+        for (kind, expected) in [(LoopKind::Handle, handles), (LoopKind::Tunnel, tunnels)] {
+            let (a, b) = (lengths(&coarse, kind), lengths(&fine, kind));
+            assert_eq!(
+                (a.len(), b.len()),
+                (expected, expected),
+                "{name} {kind:?}: {a:?} vs {b:?}"
+            );
+            for (x, y) in a.iter().zip(&b) {
+                assert!(
+                    (x - y).abs() <= 0.005 * x,
+                    "{name} {kind:?}: {a:?} vs {b:?}"
+                );
+            }
         }
     }
 }

@@ -12,10 +12,15 @@
 //!    away are tried, nearest first (+ before −), for a curve around the saddle's axis.
 //! 2. [`tighten`](mod@tighten): shorten it into a closed geodesic, not tied to mesh edges. A loop that
 //!    collapses (slides off a cap) or does not settle is dropped with its reason.
-//! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; merge
-//!    duplicates (centres within `merge_distance` × diagonal and lengths within
-//!    `merge_length`), keeping the highest persistence, then the shortest; order by
-//!    persistence (descending), then length.
+//! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; keep
+//!    one loop per neck (cycle-closing loops one per independent Z2 class, shortest
+//!    first; necks by bulge one per lobe and class); move each kept cycle-closing loop
+//!    to the narrowest place of its handle or tunnel, whichever of its saddles the
+//!    lattice gave: parallel planes up to [`LoopOptions::slide_steps`] steps away are cut
+//!    and tightened, and the shortest loop of its class wins; merge duplicates (centres
+//!    within `merge_distance` × diagonal and lengths within `merge_length`), keeping the
+//!    highest persistence, then the shortest; order by persistence (descending), then
+//!    length.
 //!
 //! Units are those of the surface. Every seed ends either as a loop or in `dropped` with
 //! a reason. Seeds are processed in parallel; the result does not depend on the thread
@@ -107,6 +112,11 @@ pub struct LoopOptions {
     /// Spacing of those planes, × the bounding-box diagonal. Default 0.005 (so up to
     /// 2 % of the diagonal away).
     pub offset_step: f64,
+    /// A kept cycle-closing loop is also cut and tightened from parallel planes up to
+    /// this many `offset_step`s away on each side, and the shortest loop of its class
+    /// replaces it: the narrowest place of its handle or tunnel, whichever saddle of the
+    /// cycle the lattice gave. Default 8 (4 % of the diagonal each way).
+    pub slide_steps: usize,
 }
 
 impl Default for LoopOptions {
@@ -121,6 +131,7 @@ impl Default for LoopOptions {
             homology_selection: true,
             plane_offsets: 4,
             offset_step: 0.005,
+            slide_steps: 8,
         }
     }
 }
@@ -139,7 +150,8 @@ pub struct NeckLoop {
     /// Length of the plane-cut loop it started from.
     pub initial_length: f64,
     /// Signed distance along the cutting normal from the saddle to the plane that gave
-    /// that loop: 0 unless the plane through the saddle had no curve around it.
+    /// that loop: 0 unless the plane through the saddle had no curve around it, or a
+    /// parallel plane gave a shorter loop of a cycle's class ([`LoopOptions::slide_steps`]).
     pub plane_offset: f64,
     /// Length-weighted centroid of the polyline.
     pub center: [f64; 3],
@@ -301,6 +313,18 @@ pub struct DroppedLoop {
     pub reason: DropReason,
 }
 
+impl DroppedLoop {
+    fn new(kind: LoopKind, seeds: &[Seed], seed: usize, reason: DropReason) -> DroppedLoop {
+        DroppedLoop {
+            kind,
+            seed,
+            saddle: seeds[seed].position,
+            persistence: seeds[seed].persistence,
+            reason,
+        }
+    }
+}
+
 /// Wall-clock seconds of the loop stage.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct LoopTimings {
@@ -355,21 +379,8 @@ pub fn find_loops_with_progress(
     let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
         .par_iter()
         .map(|seed| {
-            let outcome = loop_from_seed(surface, &topology, &geometry, seed, options).map(
-                |(tightened, offset)| {
-                    let crossed = classes::crossings(surface, &topology, &tightened.surface_points);
-                    let class = basis.class_of_crossings(crossed.iter().copied());
-                    let areas = class.iter().all(|w| *w == 0).then(|| {
-                        classes::sides(surface, &topology, &tightened.surface_points, &crossed)
-                    });
-                    Candidate {
-                        class,
-                        areas: areas.flatten(),
-                        tightened,
-                        offset,
-                    }
-                },
-            );
+            let outcome = loop_from_seed(surface, &topology, &geometry, seed, options)
+                .map(|(t, offset)| candidate(surface, &topology, &basis, t, offset));
             progress.advance(1);
             outcome
         })
@@ -382,13 +393,7 @@ pub fn find_loops_with_progress(
     let mut dropped = Vec::new();
     let mut candidates = Vec::new();
     for (i, outcome) in outcomes.into_iter().enumerate() {
-        let drop = |reason| DroppedLoop {
-            kind,
-            seed: i,
-            saddle: seeds[i].position,
-            persistence: seeds[i].persistence,
-            reason,
-        };
+        let drop = |reason| DroppedLoop::new(kind, seeds, i, reason);
         match outcome {
             Err(reason) => dropped.push(drop(reason)),
             Ok(c) if c.tightened.length > limit => dropped.push(drop(DropReason::TooLong {
@@ -399,10 +404,21 @@ pub fn find_loops_with_progress(
         }
     }
     let candidates = if options.homology_selection {
-        essential_cycles(seeds, kind, candidates, &mut dropped)
+        one_per_neck(seeds, kind, candidates, &mut dropped)
     } else {
         candidates
     };
+    let candidates: Vec<(usize, Candidate)> = candidates
+        .into_par_iter()
+        .map(|(i, c)| {
+            let c = if seeds[i].role == Some(Role::CycleClosing) {
+                narrowest(surface, &topology, &geometry, &basis, &seeds[i], c, options)
+            } else {
+                c
+            };
+            (i, c)
+        })
+        .collect();
     let loops = select(
         surface,
         seeds,
@@ -475,7 +491,7 @@ struct Candidate {
 /// cycle at one scale and cuts off a ball at another). Necks by bulge: one per lobe
 /// and homology class, the largest bulge first (a separating saddle's loop may go
 /// around a cycle too, e.g. a stick between two balls on a cage).
-fn essential_cycles(
+fn one_per_neck(
     seeds: &[Seed],
     kind: LoopKind,
     candidates: Vec<(usize, Candidate)>,
@@ -494,7 +510,7 @@ fn essential_cycles(
     });
     let mut basis = Z2Basis::default();
     let mut kept: Vec<(usize, Vec<u64>)> = Vec::new();
-    let mut cycles_kept = Vec::new();
+    let mut necks = Vec::new();
     for (i, c) in cycles {
         let length = c.tightened.length;
         let reason = if c.class.iter().all(|w| *w == 0) {
@@ -509,16 +525,10 @@ fn essential_cycles(
         };
         match reason {
             Some(_) if seeds[i].bulge.is_some() => rest.push((i, c)),
-            Some(reason) => dropped.push(DroppedLoop {
-                kind,
-                seed: i,
-                saddle: seeds[i].position,
-                persistence: seeds[i].persistence,
-                reason,
-            }),
+            Some(reason) => dropped.push(DroppedLoop::new(kind, seeds, i, reason)),
             None => {
                 kept.push((i, c.class.clone()));
-                cycles_kept.push((i, c));
+                necks.push((i, c));
             }
         }
     }
@@ -536,35 +546,51 @@ fn essential_cycles(
                 .map(|(_, j, _)| *j)
         });
         match same {
-            Some(of) => dropped.push(DroppedLoop {
+            Some(of) => dropped.push(DroppedLoop::new(
                 kind,
-                seed: i,
-                saddle: seeds[i].position,
-                persistence: seeds[i].persistence,
-                reason: DropReason::SameLobe {
+                seeds,
+                i,
+                DropReason::SameLobe {
                     of,
                     length: c.tightened.length,
                 },
-            }),
+            )),
             None => {
                 if let Some(lobe) = seeds[i].lobe {
                     by_lobe.push((lobe, i, c.class.clone()));
                 }
-                cycles_kept.push((i, c));
+                necks.push((i, c));
             }
         }
     }
-    cycles_kept
+    necks
 }
 
-/// Cut, choose, tighten; also the offset of the plane that gave the loop.
-fn loop_from_seed(
+/// A kept loop with its class, and the areas of its sides when it separates.
+fn candidate(
     surface: &SurfaceMesh,
     topology: &Topology,
-    geometry: &SurfaceGeometry,
-    seed: &Seed,
-    options: &LoopOptions,
-) -> std::result::Result<(Tightened, f64), DropReason> {
+    basis: &HomologyBasis,
+    tightened: Tightened,
+    offset: f64,
+) -> Candidate {
+    let crossed = classes::crossings(surface, topology, &tightened.surface_points);
+    let class = basis.class_of_crossings(crossed.iter().copied());
+    let areas = class
+        .iter()
+        .all(|w| *w == 0)
+        .then(|| classes::sides(surface, topology, &tightened.surface_points, &crossed))
+        .flatten();
+    Candidate {
+        tightened,
+        offset,
+        class,
+        areas,
+    }
+}
+
+/// The unit cutting normal of a seed, and the normals to try (it and its variations).
+fn cutting_normals(seed: &Seed, options: &LoopOptions) -> ([f64; 3], Vec<[f64; 3]>) {
     let n = scale(seed.normal, 1.0 / norm(seed.normal));
     let mut normals = vec![n];
     let (u, v) = plane_basis(n);
@@ -575,7 +601,18 @@ fn loop_from_seed(
         let a = options.variation_angle;
         normals.push(add(scale(n, a.cos()), scale(dir, a.sin())));
     }
+    (n, normals)
+}
 
+/// Cut, choose, tighten; also the offset of the plane that gave the loop.
+fn loop_from_seed(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    geometry: &SurfaceGeometry,
+    seed: &Seed,
+    options: &LoopOptions,
+) -> std::result::Result<(Tightened, f64), DropReason> {
+    let (n, normals) = cutting_normals(seed, options);
     // The plane through the saddle first, then parallel ones nearest first.
     let step = options.offset_step * surface.bbox_diagonal();
     let offsets = std::iter::once(0.0)
@@ -598,6 +635,42 @@ fn loop_from_seed(
         offsets_tried: options.plane_offsets,
         offset_step: step,
     })
+}
+
+/// The shortest loop of `c`'s class over the parallel planes up to
+/// [`LoopOptions::slide_steps`] steps from the one that gave `c` (nearest first, + before
+/// −); `c` itself when none is shorter.
+fn narrowest(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    geometry: &SurfaceGeometry,
+    basis: &HomologyBasis,
+    seed: &Seed,
+    c: Candidate,
+    options: &LoopOptions,
+) -> Candidate {
+    let (n, normals) = cutting_normals(seed, options);
+    let step = options.offset_step * surface.bbox_diagonal();
+    let mut best = c;
+    let start = best.offset;
+    for j in 1..=options.slide_steps {
+        for offset in [start + j as f64 * step, start - j as f64 * step] {
+            let point = add(seed.position, scale(n, offset));
+            let Some((_, curve)) = around_point(surface, topology, &normals, point).0 else {
+                continue;
+            };
+            let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
+            let Ok(t) = tightened(t) else { continue };
+            // Shorter beyond round-off: the same geodesic reached again does not move it.
+            if t.length < best.tightened.length * (1.0 - 1e-6) {
+                let other = candidate(surface, topology, basis, t, offset);
+                if other.class == best.class {
+                    best = other;
+                }
+            }
+        }
+    }
+    best
 }
 
 /// The shortest closed curve around `point` over the planes through it with these
@@ -683,16 +756,15 @@ fn select(
         });
         if let Some(of) = duplicate_of {
             loops[of].duplicates.push(i);
-            dropped.push(DroppedLoop {
+            dropped.push(DroppedLoop::new(
                 kind,
-                seed: i,
-                saddle: seeds[i].position,
-                persistence: seeds[i].persistence,
-                reason: DropReason::Duplicate {
+                seeds,
+                i,
+                DropReason::Duplicate {
                     of,
                     length: t.length,
                 },
-            });
+            ));
             continue;
         }
         let seed = seeds[i];

@@ -97,9 +97,10 @@ pub struct MorseOptions {
     pub min_levels: usize,
     /// Scale space: smallest bulge ratio of a separating neck: the unsmoothed distance
     /// (inscribed radius) near the lobe's maximum over the one near the saddle, at one
-    /// level (default 1.3: above the bumps of tubes without a neck, which stay below
-    /// 1.27 on the analytic shapes — a pretzel's junction is the largest — and below the
-    /// thinnest real necks seen, 1.36 at the fertility's baby's neck).
+    /// level (default 1.5: above the bumps where tubes meet, up to 1.26 on the analytic
+    /// shapes (a pretzel's junction) and 1.35 at the wire sphere's nodes; this also
+    /// leaves out the thinnest bulges a person may call necks, 1.36 at the fertility's
+    /// baby's neck, 1.48 at the armadillo's arm).
     pub min_bulge: f64,
     /// Paper: heat time step `τ` in units where the surface's bounding box has longest
     /// side 1 (default 0.01, the paper's `λh`).
@@ -128,7 +129,7 @@ impl Default for MorseOptions {
             min_scale: None,
             max_scale: 0.25,
             min_levels: 3,
-            min_bulge: 1.3,
+            min_bulge: 1.5,
             tau: 0.01,
             initial_steps: 10,
             steps: 20,

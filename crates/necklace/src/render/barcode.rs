@@ -4,6 +4,7 @@
 //! side (handles inside, tunnels outside), bars sorted by birth. Entry point:
 //! [`barcode`].
 
+use super::chart::tick_text;
 use super::raster::Canvas;
 use super::{font, Image};
 use crate::error::{Error, Result};
@@ -64,7 +65,7 @@ pub fn barcode(panels: &[BarPanel], max_scale: f64, width: u32, height: u32) -> 
 
     // The two ends, then ticks at 1, 2, 5 × 10^k clear of them, with a light grid.
     for (v, at) in [(lo, left), (hi, right)] {
-        let text = tick(v);
+        let text = tick_text(v);
         let tw = (font::text_width(&text) * scale) as f64;
         let x = if at == left { left } else { right - tw };
         canvas.text(x, bottom + 0.6 * glyph, scale, &text, [0.3; 3], None);
@@ -78,7 +79,7 @@ pub fn barcode(panels: &[BarPanel], max_scale: f64, width: u32, height: u32) -> 
                 continue;
             }
             canvas.flat_line([sx(v), top], [sx(v), bottom], line * 0.5, [0.9; 3]);
-            let text = tick(v);
+            let text = tick_text(v);
             let tw = (font::text_width(&text) * scale) as f64;
             canvas.text(
                 sx(v) - 0.5 * tw,
@@ -144,18 +145,4 @@ pub fn barcode(panels: &[BarPanel], max_scale: f64, width: u32, height: u32) -> 
         height,
         pixels,
     })
-}
-
-/// A scale in few characters.
-fn tick(v: f64) -> String {
-    let s = if v >= 100.0 {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.3}")
-    };
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
 }

@@ -48,7 +48,7 @@ fn tick_step(max: f64, target: f64) -> f64 {
 }
 
 /// A tick value in few characters: 250K, 1.5M, 0.25.
-fn tick_text(v: f64) -> String {
+pub(super) fn tick_text(v: f64) -> String {
     let trim = |s: String| {
         if s.contains('.') {
             s.trim_end_matches('0').trim_end_matches('.').to_string()
