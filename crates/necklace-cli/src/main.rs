@@ -109,6 +109,14 @@ enum Command {
         tunnels: bool,
         #[command(flatten)]
         method: MethodArgs,
+        /// Where the plane through a saddle has no curve around it: parallel planes tried
+        /// on each side, 0.5 % of the diagonal apart.
+        #[arg(long, default_value_t = 4)]
+        plane_offsets: usize,
+        /// A kept cycle-closing loop is also cut from parallel planes up to this many
+        /// steps away on each side, and the shortest loop of its class wins (0: off).
+        #[arg(long, default_value_t = 8)]
+        slide_steps: usize,
         /// Write loops.obj, loops.ply, loops.json and critical.ply into this folder.
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -353,19 +361,25 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             handles,
             tunnels,
             method,
+            plane_offsets,
+            slide_steps,
             output,
             png,
             volume,
             json,
         } => {
             let options = pipeline::NeckOptions {
+                loops: necklace::loops::LoopOptions {
+                    plane_offsets,
+                    slide_steps,
+                    ..necklace::loops::LoopOptions::default()
+                },
                 // Neither flag: both kinds.
                 handles: handles || !tunnels,
                 tunnels: tunnels || !handles,
                 volume: method.volume(),
                 morse: method.morse(),
                 keep_volume: volume,
-                ..pipeline::NeckOptions::default()
             };
             let files = OutputOptions {
                 picture: png.then(RenderOptions::default),

@@ -289,6 +289,7 @@ fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
         "points",
         "length",
         "initial_length",
+        "plane_offset",
         "center",
         "normal",
         "radius",
@@ -320,10 +321,25 @@ fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
             .unwrap();
     assert_eq!(saved["loops"], json["loops"]);
 
-    // Handles only: no tunnel side is run.
-    let out = necklace(&["loops", mesh.to_str().unwrap(), "--handles", "--json"]);
+    // Handles only: no tunnel side is run. Without parallel planes every loop comes
+    // from the plane through its saddle.
+    let out = necklace(&[
+        "loops",
+        mesh.to_str().unwrap(),
+        "--handles",
+        "--plane-offsets",
+        "0",
+        "--slide-steps",
+        "0",
+        "--json",
+    ]);
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(json["morse"].as_array().unwrap().len(), 1);
+    let loops = json["loops"].as_array().unwrap();
+    assert!(!loops.is_empty());
+    assert!(loops.iter().all(|l| l["plane_offset"] == 0.0));
+    let out = necklace(&["loops", mesh.to_str().unwrap(), "--slide-steps", "-1"]);
+    assert_eq!(out.status.code(), Some(2));
 
     let out = necklace(&["loops", dir.join("missing.obj").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
