@@ -4,7 +4,7 @@
 //! side (handles inside, tunnels outside), bars sorted by birth. Entry point:
 //! [`barcode`].
 
-use super::chart::tick_text;
+use super::chart::{centred_tick_label, tick_text};
 use super::raster::Canvas;
 use super::{font, Image};
 use crate::error::{Error, Result};
@@ -79,16 +79,7 @@ pub fn barcode(panels: &[BarPanel], max_scale: f64, width: u32, height: u32) -> 
                 continue;
             }
             canvas.flat_line([sx(v), top], [sx(v), bottom], line * 0.5, [0.9; 3]);
-            let text = tick_text(v);
-            let tw = (font::text_width(&text) * scale) as f64;
-            canvas.text(
-                sx(v) - 0.5 * tw,
-                bottom + 0.6 * glyph,
-                scale,
-                &text,
-                [0.3; 3],
-                None,
-            );
+            centred_tick_label(&mut canvas, sx(v), bottom + 0.6 * glyph, scale, v);
         }
         decade *= 10.0;
     }

@@ -47,6 +47,13 @@ fn tick_step(max: f64, target: f64) -> f64 {
     nice * magnitude
 }
 
+/// The tick label of `v`, centred on `x`, its top at `y`.
+pub(super) fn centred_tick_label(canvas: &mut Canvas, x: f64, y: f64, scale: usize, v: f64) {
+    let text = tick_text(v);
+    let width = (font::text_width(&text) * scale) as f64;
+    canvas.text(x - 0.5 * width, y, scale, &text, [0.3; 3], None);
+}
+
 /// A tick value in few characters: 250K, 1.5M, 0.25.
 pub(super) fn tick_text(v: f64) -> String {
     let trim = |s: String| {
@@ -121,16 +128,7 @@ pub fn chart(chart: &Chart, width: u32, height: u32) -> Result<Image> {
     let mut v = 0.0;
     while v <= x_top * (1.0 + 1e-9) {
         canvas.flat_line([sx(v), top], [sx(v), bottom], line * 0.6, [0.88; 3]);
-        let text = tick_text(v);
-        let tw = (font::text_width(&text) * scale) as f64;
-        canvas.text(
-            sx(v) - 0.5 * tw,
-            bottom + 0.6 * glyph,
-            scale,
-            &text,
-            [0.3; 3],
-            None,
-        );
+        centred_tick_label(&mut canvas, sx(v), bottom + 0.6 * glyph, scale, v);
         v += x_step;
     }
     canvas.flat_line([left, bottom], [right, bottom], line, [0.2; 3]);
