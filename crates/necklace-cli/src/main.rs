@@ -11,6 +11,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Schedule};
 use necklace::output::OutputOptions;
 use necklace::pipeline::{self, Mesher, Side, VolumeOptions};
@@ -110,12 +111,13 @@ enum Command {
         #[command(flatten)]
         method: MethodArgs,
         /// Where the plane through a saddle has no curve around it: parallel planes tried
-        /// on each side, 0.5 % of the diagonal apart.
-        #[arg(long, default_value_t = 4)]
+        /// on each side, 0.125 % of the diagonal apart.
+        #[arg(long, default_value_t = LoopOptions::default().plane_offsets)]
         plane_offsets: usize,
         /// A kept cycle-closing loop is also cut from parallel planes up to this many
-        /// steps away on each side, and the shortest loop of its class wins (0: off).
-        #[arg(long, default_value_t = 8)]
+        /// steps (0.5 % of the diagonal) away on each side, and the shortest loop of its
+        /// class wins (0: off).
+        #[arg(long, default_value_t = LoopOptions::default().slide_steps)]
         slide_steps: usize,
         /// Write loops.obj, loops.ply, loops.json and critical.ply into this folder.
         #[arg(short, long)]
@@ -369,10 +371,10 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             json,
         } => {
             let options = pipeline::NeckOptions {
-                loops: necklace::loops::LoopOptions {
+                loops: LoopOptions {
                     plane_offsets,
                     slide_steps,
-                    ..necklace::loops::LoopOptions::default()
+                    ..LoopOptions::default()
                 },
                 // Neither flag: both kinds.
                 handles: handles || !tunnels,

@@ -57,6 +57,46 @@ fn wavy_revolution(
     SurfaceMesh::new(positions, triangles).unwrap()
 }
 
+/// A ring whose core curve (cos t, sin t, `a` cos 2t) rises and falls like a saddle,
+/// with a round tube of radius `rho`: a window whose rim is not flat. The planes z = h
+/// that cut the tube all the way round, in a curve around the hole, are those with
+/// |h| < `rho` − `a`.
+fn saddle_ring(a: f64, rho: f64, along: usize, around: usize) -> SurfaceMesh {
+    let mut positions = Vec::with_capacity(along * around);
+    for i in 0..along {
+        let t = 2.0 * PI * i as f64 / along as f64;
+        let core = [t.cos(), t.sin(), a * (2.0 * t).cos()];
+        let tangent = [-t.sin(), t.cos(), -2.0 * a * (2.0 * t).sin()];
+        let tl = (tangent[0].powi(2) + tangent[1].powi(2) + tangent[2].powi(2)).sqrt();
+        let tangent = tangent.map(|x| x / tl);
+        // The radial direction made normal to the tangent, and the binormal.
+        let radial = [t.cos(), t.sin(), 0.0];
+        let along_t = radial[0] * tangent[0] + radial[1] * tangent[1];
+        let n = [0, 1, 2].map(|k| radial[k] - along_t * tangent[k]);
+        let nl = (n[0].powi(2) + n[1].powi(2) + n[2].powi(2)).sqrt();
+        let n = n.map(|x| x / nl);
+        let b = [
+            tangent[1] * n[2] - tangent[2] * n[1],
+            tangent[2] * n[0] - tangent[0] * n[2],
+            tangent[0] * n[1] - tangent[1] * n[0],
+        ];
+        for j in 0..around {
+            let phi = 2.0 * PI * j as f64 / around as f64;
+            let (c, s) = (rho * phi.cos(), rho * phi.sin());
+            positions.push([0, 1, 2].map(|k| core[k] + c * n[k] + s * b[k]));
+        }
+    }
+    let id = |i: usize, j: usize| ((i % along) * around + j % around) as u32;
+    let mut triangles = Vec::new();
+    for i in 0..along {
+        for j in 0..around {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    SurfaceMesh::new(positions, triangles).unwrap()
+}
+
 /// Profile with its narrowest circle, radius 0.2, at z = 0; capped towards the poles.
 fn waist(z: f64) -> f64 {
     let h: f64 = 1.0;
@@ -518,6 +558,34 @@ fn a_plane_that_misses_the_saddle_gives_a_reasoned_drop_and_bad_seeds_an_error()
     assert!(find_loops(&mesh, &outside, LoopKind::Handle, &bad).is_err());
 }
 
+/// A seed on the z axis at height `z`, cutting with horizontal planes.
+fn seed_on_z_axis(z: f64) -> Seed {
+    Seed {
+        position: [0.0, 0.0, z],
+        normal: [0.0, 0.0, 1.0],
+        persistence: 5,
+        ..Seed::default()
+    }
+}
+
+/// The one tunnel loop of `seeds`, checked to come from the plane `offset` away.
+fn one_tunnel_loop(
+    mesh: &SurfaceMesh,
+    seeds: &[Seed],
+    options: &LoopOptions,
+    offset: f64,
+) -> NeckLoop {
+    let found = find_loops(mesh, seeds, LoopKind::Tunnel, options).unwrap();
+    assert_eq!(found.loops.len(), 1, "{:?}", found.dropped);
+    let l = found.loops.into_iter().next().unwrap();
+    assert!(
+        (l.plane_offset - offset).abs() < 1e-12,
+        "{} vs {offset}",
+        l.plane_offset
+    );
+    l
+}
+
 #[test]
 fn where_the_plane_through_the_saddle_misses_a_parallel_plane_gives_the_loop() {
     let shape = Shape::new(ShapeKind::Torus);
@@ -525,22 +593,9 @@ fn where_the_plane_through_the_saddle_misses_a_parallel_plane_gives_the_loop() {
     let (big_r, r) = (shape.param("R"), shape.param("r"));
     // Above the tube, on the hole's axis: the plane z = const misses the torus.
     let step = LoopOptions::default().offset_step * mesh.bbox_diagonal();
-    let above = r + 1.5 * step;
-    let seeds = [Seed {
-        position: [0.0, 0.0, above],
-        normal: [0.0, 0.0, 1.0],
-        persistence: 5,
-        ..Seed::default()
-    }];
-    let found = find_loops(&mesh, &seeds, LoopKind::Tunnel, &LoopOptions::default()).unwrap();
-    assert_eq!(found.loops.len(), 1, "{:?}", found.dropped);
-    let l = &found.loops[0];
+    let seeds = [seed_on_z_axis(r + 1.5 * step)];
     // The nearest plane that cuts the tube: two steps down (one step is still above).
-    assert!(
-        (l.plane_offset + 2.0 * step).abs() < 1e-12,
-        "{}",
-        l.plane_offset
-    );
+    let l = one_tunnel_loop(&mesh, &seeds, &LoopOptions::default(), -2.0 * step);
     // It tightens to the hole's narrowest circle.
     let hole = 2.0 * PI * (big_r - r);
     assert!(
@@ -563,6 +618,48 @@ fn where_the_plane_through_the_saddle_misses_a_parallel_plane_gives_the_loop() {
             closed_curves: 0,
             open_curves: 0,
             offsets_tried: 0,
+            ..
+        }
+    ));
+}
+
+#[test]
+fn a_window_with_a_curved_rim_finds_its_thin_band_of_planes() {
+    // Planes cut the tube all the way round only for |z| < 0.003.
+    let (a, rho) = (0.147, 0.15);
+    let mesh = saddle_ring(a, rho, 256, 48);
+    let band = rho - a;
+    let step = LoopOptions::default().offset_step * mesh.bbox_diagonal();
+    // The seed's own plane and the first step down miss; two steps down cut.
+    let seeds = [seed_on_z_axis(band + 1.5 * step)];
+    // The hole is wide for the shape's flat box: allow long loops.
+    let options = LoopOptions {
+        max_length: 3.0,
+        ..LoopOptions::default()
+    };
+    let l = one_tunnel_loop(&mesh, &seeds, &options, -2.0 * step);
+    // Around the hole: its shadow on z = 0 winds once outside the disk of radius
+    // 1 - rho, and it is shorter than the core circle.
+    assert_eq!(winding_xy(&l.points, 0.0, 0.0).abs(), 1);
+    assert!(
+        2.0 * PI * (1.0 - rho) <= l.length && l.length < 2.0 * PI,
+        "{}",
+        l.length
+    );
+
+    // Planes four times as far apart (the spacing before) jump over the band.
+    let coarse = LoopOptions {
+        plane_offsets: 4,
+        offset_step: 4.0 * LoopOptions::default().offset_step,
+        ..options
+    };
+    assert!(4.0 * step > 2.0 * band);
+    let missed = find_loops(&mesh, &seeds, LoopKind::Tunnel, &coarse).unwrap();
+    assert!(missed.loops.is_empty());
+    assert!(matches!(
+        missed.dropped[0].reason,
+        DropReason::NoLoopAroundSaddle {
+            offsets_tried: 4,
             ..
         }
     ));

@@ -16,8 +16,9 @@
 //!    one loop per neck (cycle-closing loops one per independent Z2 class, shortest
 //!    first; necks by bulge one per lobe and class); move each kept cycle-closing loop
 //!    to the narrowest place of its handle or tunnel, whichever of its saddles the
-//!    lattice gave: parallel planes up to [`LoopOptions::slide_steps`] steps away are cut
-//!    and tightened, and the shortest loop of its class wins; merge duplicates (centres
+//!    lattice gave: parallel planes up to [`LoopOptions::slide_steps`] ×
+//!    [`LoopOptions::slide_step`] × diagonal away are cut and tightened, and the
+//!    shortest loop of its class wins; merge duplicates (centres
 //!    within `merge_distance` × diagonal and lengths within `merge_length`), keeping the
 //!    highest persistence, then the shortest; order by persistence (descending), then
 //!    length.
@@ -107,16 +108,21 @@ pub struct LoopOptions {
     /// is filled again lower down: noise). Default true.
     pub homology_selection: bool,
     /// When no curve of the plane through the saddle goes around it: how many parallel
-    /// planes to try on each side. Default 4.
+    /// planes to try on each side. Default 16.
     pub plane_offsets: usize,
-    /// Spacing of those planes, × the bounding-box diagonal. Default 0.005 (so up to
-    /// 2 % of the diagonal away).
+    /// Spacing of those planes, × the bounding-box diagonal. Default 0.00125 (so up to
+    /// 2 % of the diagonal away). Fine, because the band of planes that go around a
+    /// window with a curved rim can be thin: on the wire sphere, planes 0.25 % of the
+    /// diagonal apart decide between a loop and none.
     pub offset_step: f64,
     /// A kept cycle-closing loop is also cut and tightened from parallel planes up to
-    /// this many `offset_step`s away on each side, and the shortest loop of its class
+    /// this many `slide_step`s away on each side, and the shortest loop of its class
     /// replaces it: the narrowest place of its handle or tunnel, whichever saddle of the
-    /// cycle the lattice gave. Default 8 (4 % of the diagonal each way).
+    /// cycle the lattice gave. Default 8.
     pub slide_steps: usize,
+    /// Spacing of those planes, × the bounding-box diagonal. Default 0.005 (so up to
+    /// 4 % of the diagonal each way).
+    pub slide_step: f64,
 }
 
 impl Default for LoopOptions {
@@ -129,9 +135,10 @@ impl Default for LoopOptions {
             merge_distance: 0.01,
             merge_length: 0.02,
             homology_selection: true,
-            plane_offsets: 4,
-            offset_step: 0.005,
+            plane_offsets: 16,
+            offset_step: 0.00125,
             slide_steps: 8,
+            slide_step: 0.005,
         }
     }
 }
@@ -460,6 +467,7 @@ fn check_inputs(surface: &SurfaceMesh, seeds: &[Seed], options: &LoopOptions) ->
         options.max_length,
         options.merge_length,
         options.offset_step,
+        options.slide_step,
         t.min_length_ratio,
         t.angle_tolerance,
     ];
@@ -638,8 +646,8 @@ fn loop_from_seed(
 }
 
 /// The shortest loop of `c`'s class over the parallel planes up to
-/// [`LoopOptions::slide_steps`] steps from the one that gave `c` (nearest first, + before
-/// −); `c` itself when none is shorter.
+/// [`LoopOptions::slide_steps`] × [`LoopOptions::slide_step`] from the one that gave `c`
+/// (nearest first, + before −); `c` itself when none is shorter.
 fn narrowest(
     surface: &SurfaceMesh,
     topology: &Topology,
@@ -650,7 +658,7 @@ fn narrowest(
     options: &LoopOptions,
 ) -> Candidate {
     let (n, normals) = cutting_normals(seed, options);
-    let step = options.offset_step * surface.bbox_diagonal();
+    let step = options.slide_step * surface.bbox_diagonal();
     let mut best = c;
     let start = best.offset;
     for j in 1..=options.slide_steps {
