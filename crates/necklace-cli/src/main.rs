@@ -503,12 +503,13 @@ fn critical(
     );
     let _ = writeln!(
         out,
-        "step  maxima  1-saddles  2-saddles  monkeys  morse sum (expected)"
+        "step  maxima  1-saddles  2-saddles  monkeys  morse sum (expected)  essential cycles ({})",
+        result.cycle_rank
     );
     for s in &result.steps {
         let _ = writeln!(
             out,
-            "{:>4}  {:>6}  {:>9}  {:>9}  {:>7}  {:>4} ({}){}",
+            "{:>4}  {:>6}  {:>9}  {:>9}  {:>7}  {:>4} ({}){}  {:>4}{}",
             s.step,
             s.maxima,
             s.saddles1,
@@ -516,7 +517,9 @@ fn critical(
             s.monkeys,
             s.morse_sum,
             s.morse_expected,
-            if s.morse_ok { "" } else { "  MISMATCH" }
+            if s.morse_ok { "" } else { "  MISMATCH" },
+            s.essential_cycles,
+            if s.cycles_ok { "" } else { "  MISMATCH" }
         );
     }
     let _ = writeln!(out, "{} neck 2-saddles:", result.saddles.len());
@@ -574,10 +577,12 @@ fn loops(
     for check in &report.morse {
         let _ = writeln!(
             out,
-            "Morse check {:?}: {} ({} steps)",
+            "Morse check {:?}: {} ({} steps); essential cycles {} (H1 rank {})",
             check.side,
             if check.ok { "ok" } else { "FAILED" },
-            check.steps.len()
+            check.steps.len(),
+            if check.cycles_ok { "ok" } else { "FAILED" },
+            check.cycle_rank
         );
     }
     let t = &report.timings.total;

@@ -192,13 +192,7 @@ impl Z2Basis {
     /// Add `v` if it is independent of the vectors so far; whether it was.
     pub fn insert(&mut self, v: &[u64]) -> bool {
         let mut v = v.to_vec();
-        for (lead, row) in &self.rows {
-            if v[lead / 64] >> (lead % 64) & 1 == 1 {
-                for (x, r) in v.iter_mut().zip(row) {
-                    *x ^= r;
-                }
-            }
-        }
+        self.reduce(&mut v);
         match leading_bit(&v) {
             Some(lead) => {
                 self.rows.push((lead, v));
@@ -211,6 +205,23 @@ impl Z2Basis {
     /// Vectors inserted so far (the rank).
     pub fn rank(&self) -> usize {
         self.rows.len()
+    }
+
+    /// Reduce `v` modulo the span: afterwards no leading bit of the basis is set in it,
+    /// and two vectors are equal modulo the span exactly when their reductions are.
+    pub fn reduce(&self, v: &mut [u64]) {
+        for (lead, row) in &self.rows {
+            if v[lead / 64] >> (lead % 64) & 1 == 1 {
+                for (x, r) in v.iter_mut().zip(row) {
+                    *x ^= r;
+                }
+            }
+        }
+    }
+
+    /// The leading bits of the basis vectors, in insertion order.
+    pub fn leads(&self) -> impl Iterator<Item = usize> + '_ {
+        self.rows.iter().map(|(lead, _)| *lead)
     }
 }
 

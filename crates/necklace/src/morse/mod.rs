@@ -44,6 +44,7 @@
 //! steps and levels are counted from 1 (step `k` = the field after `k` heat steps).
 
 pub mod critical;
+pub mod cycles;
 pub mod hessian;
 pub mod laplacian;
 pub mod roles;
@@ -65,7 +66,7 @@ pub use critical::{
 };
 pub use hessian::{hessian_at, Hessian};
 pub use laplacian::{cotangent_stiffness, lumped_mass, SparseMatrix};
-pub use roles::{RoleAt, SaddleRole, Sweep};
+pub use roles::{RoleAt, Roles, SaddleRole, Sweep};
 pub use smoothing::{implicit_step, HeatSolver, SolverOptions, StepReport};
 pub use tracking::{CriticalPoint, StepEvents, Track, Tracker};
 
@@ -169,6 +170,13 @@ pub struct StepSummary {
     pub morse_expected: i64,
     /// `morse_sum == morse_expected`.
     pub morse_ok: bool,
+    /// Cycles the superlevel sweep closed that live for ever (their classes are
+    /// independent; the rest are filled lower down: noise, or second copies). See
+    /// [`roles`].
+    pub essential_cycles: usize,
+    /// `essential_cycles` equals [`MorseResult::cycle_rank`]: every class of the swept
+    /// complex is born at a saddle of this level.
+    pub cycles_ok: bool,
     /// Births, deaths, moves and cancellations since the previous classified step.
     pub events: StepEvents,
 }
@@ -209,6 +217,10 @@ pub struct Saddle {
     pub bulge: Option<f64>,
     /// With `bulge`: the track of the maximum of the lobe it cuts off at that level.
     pub lobe: Option<usize>,
+    /// Cycle-closing: at some fitted level (its representative step on the paper's
+    /// schedule) the cycle it closed was essential, never filled again (see
+    /// [`roles`]); false when every cycle it closed was noise or a second copy.
+    pub essential: bool,
     /// The fitted Hessian.
     pub hessian: Hessian,
     /// Cutting-plane normal: the eigenvector of the positive eigenvalue.
@@ -325,6 +337,10 @@ pub struct MorseResult {
     pub field: Vec<f64>,
     /// The mesh's Morse sum and the Euler characteristics it comes from.
     pub morse_expected: MorseExpectation,
+    /// The dimension of H₁ (Z2) of the complex the superlevel sweep covers (interior
+    /// vertices, outer sphere coned off): the surface's genus when the volume mesh kept
+    /// its topology ([`cycles`]).
+    pub cycle_rank: usize,
     /// Seconds per part.
     pub timings: MorseTimings,
 }
@@ -444,7 +460,7 @@ pub fn analyze_with_progress(
             &f,
             step,
             &critical,
-            &roles,
+            &roles.roles,
             &tracker,
             &mut observations,
         );
@@ -453,7 +469,7 @@ pub fn analyze_with_progress(
             planned.scale,
             &classification,
             &roles,
-            morse_expected.sum,
+            (morse_expected.sum, sweep.cycle_rank()),
             events,
         ));
         timings.selection += start.elapsed().as_secs_f64();
@@ -498,6 +514,7 @@ pub fn analyze_with_progress(
         tracks: tracker.tracks,
         field: f,
         morse_expected,
+        cycle_rank: sweep.cycle_rank(),
         timings,
     })
 }
@@ -714,6 +731,7 @@ fn select_over_scales(
             role,
             bulge: necked.and_then(|w| w.role.bulge),
             lobe: necked.and_then(|w| w.lobe),
+            essential: fitted.iter().any(|(o, _)| o.role.essential),
             hessian: h,
             normal: h.normal(),
         });
@@ -777,6 +795,7 @@ fn select_at_last_step(
                 role: last.map_or(SaddleRole::CycleClosing, |o| o.role.role),
                 bulge: last.and_then(|o| o.role.bulge),
                 lobe: last.and_then(|o| o.lobe),
+                essential: last.is_some_and(|o| o.role.essential),
                 hessian: h,
                 normal: h.normal(),
             }),
@@ -1030,11 +1049,11 @@ fn summarize(
     step: usize,
     scale: f64,
     c: &Classification,
-    roles: &[RoleAt],
-    morse_expected: i64,
+    roles: &Roles,
+    (morse_expected, cycle_rank): (i64, usize),
     events: StepEvents,
 ) -> StepSummary {
-    let count = |role| roles.iter().filter(|r| r.role == role).count();
+    let count = |role| roles.roles.iter().filter(|r| r.role == role).count();
     StepSummary {
         step,
         scale,
@@ -1049,6 +1068,8 @@ fn summarize(
         morse_sum: c.morse_sum,
         morse_expected,
         morse_ok: c.morse_sum == morse_expected,
+        essential_cycles: roles.essential_cycles,
+        cycles_ok: roles.essential_cycles == cycle_rank,
         events,
     }
 }

@@ -27,13 +27,25 @@
 //! ball (same lobe, same bulge: the same neck), or is a *local cycle* when the ball has
 //! none.
 //!
-//! Entry points: [`Sweep::new`] once per mesh (vertex adjacency), then [`Sweep::roles`]
-//! per field. Sequential and sorted: the result does not depend on the thread count.
+//! Which cycles are essential: every vertex carries, beside its union–find parent, the
+//! value (over the cocycle basis of [`cycles`](super::cycles)) of a path from it to its
+//! component's root. Where a saddle's upper neighbours lie in one component, each path
+//! through two of them closes a cycle whose class is the sum of their values; a class
+//! independent of those closed above it is new, the saddle's cycle is *essential*
+//! (the elder rule: a noise cycle, or a second copy of one, is filled lower down).
+//! At the bottom the essential cycles are as many as the genus: [`Roles`] reports
+//! their count.
+//!
+//! Entry points: [`Sweep::new`] once per mesh (vertex adjacency, cocycle basis), then
+//! [`Sweep::roles`] per field. Sequential and sorted: the result does not depend on the
+//! thread count.
 
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::critical::{Classification, VertexType};
+use super::cycles::Cocycles;
+use crate::mesh::Z2Basis;
 use crate::tet::{TetMesh, VertexKind};
 
 /// What a 2-saddle does to the superlevel sets.
@@ -67,6 +79,19 @@ pub struct RoleAt {
     pub bulge: Option<f64>,
     /// Separating: `f(younger_max) / f(vertex)` on the smoothed field of this level.
     pub field_ratio: Option<f64>,
+    /// Cycle-closing: the class of its cycle is independent of the cycles closed above
+    /// it, so the cycle lives for ever (false: a 1-saddle lower down fills it).
+    pub essential: bool,
+}
+
+/// The roles of one field's 2-saddles, and the count of essential cycles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Roles {
+    /// One per 2-saddle, in vertex order.
+    pub roles: Vec<RoleAt>,
+    /// Cycles closed in the sweep whose classes are independent: the dimension of
+    /// H₁(X; Z2) when the sweep is consistent (every class is born at a saddle).
+    pub essential_cycles: usize,
 }
 
 /// Vertex adjacency of a mesh, built once; see the module doc.
@@ -75,48 +100,35 @@ pub struct Sweep {
     kinds: Vec<VertexKind>,
     start: Vec<usize>,
     neighbours: Vec<u32>,
+    cocycles: Cocycles,
 }
 
 /// The outer sphere's component has no maximum vertex.
 const OUTER: u32 = u32::MAX;
 
 impl Sweep {
-    /// Build the vertex adjacency (the edges of the tets).
+    /// Build the vertex adjacency (the edges of the tets) and the cocycle basis.
     pub fn new(mesh: &TetMesh) -> Sweep {
-        let neighbours: Vec<Vec<u32>> = (0..mesh.num_vertices())
-            .into_par_iter()
-            .map(|v| {
-                let mut around: Vec<u32> = mesh
-                    .vertex_tets(v)
-                    .iter()
-                    .flat_map(|&t| mesh.tets[t as usize])
-                    .filter(|&u| u as usize != v)
-                    .collect();
-                around.sort_unstable();
-                around.dedup();
-                around
-            })
-            .collect();
-        let mut start = Vec::with_capacity(neighbours.len() + 1);
-        start.push(0);
-        for n in &neighbours {
-            start.push(start.last().copied().unwrap_or(0) + n.len());
-        }
+        let (start, neighbours) = adjacency(mesh);
+        let cocycles = Cocycles::new(mesh, &start, &neighbours);
         Sweep {
             kinds: mesh.kinds.clone(),
             start,
-            neighbours: neighbours.concat(),
+            neighbours,
+            cocycles,
         }
     }
 
+    /// The dimension of H₁(X; Z2) of the swept complex (see [`cycles`](super::cycles)):
+    /// the genus, when the volume mesh kept the surface's topology.
+    pub fn cycle_rank(&self) -> usize {
+        self.cocycles.rank()
+    }
+
     /// The role of every 2-saddle of `classification` (a classification of `f`), in
-    /// vertex order; `distance` is the unsmoothed field (for the bulge ratios).
-    pub fn roles(
-        &self,
-        f: &[f64],
-        classification: &Classification,
-        distance: &[f64],
-    ) -> Vec<RoleAt> {
+    /// vertex order, and the essential cycles; `distance` is the unsmoothed field (for
+    /// the bulge ratios).
+    pub fn roles(&self, f: &[f64], classification: &Classification, distance: &[f64]) -> Roles {
         let n = self.kinds.len();
         // Sorted by decreasing (f, index), the keys beside the indices (no indirection).
         let mut interior: Vec<(f64, u32)> = (0..n as u32)
@@ -126,7 +138,8 @@ impl Sweep {
         interior.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
         let outer = (0..n as u32).filter(|&v| self.kinds[v as usize] == VertexKind::Outer);
 
-        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut forest = Forest::new(n, self.potential_words());
+        let w = forest.words;
         let mut added = vec![false; n];
         // Per root: the highest vertex of its component (OUTER for the sphere's).
         let mut top = vec![OUTER; n];
@@ -137,39 +150,67 @@ impl Sweep {
             added[v as usize] = true;
             match first_outer {
                 None => first_outer = Some(v),
-                Some(o) => parent[v as usize] = o,
+                Some(o) => forest.parent[v as usize] = o,
             }
         }
         let mut roles = Vec::new();
         // Per vertex: its index in `roles` once it has one.
         let mut role_of_vertex = vec![u32::MAX; n];
         let mut ball = Ball::new(n);
+        let mut essential = Z2Basis::default();
+        // The components above v, and v's path value into each (w words per root).
         let mut roots: Vec<u32> = Vec::new();
+        let mut into: Vec<u64> = Vec::new();
+        let mut through: Vec<(u32, Vec<u64>)> = Vec::new();
+        let mut value = vec![0u64; w];
+        let mut root_into = vec![0u64; w];
         for &(_, v) in &interior {
             let vi = v as usize;
             added[vi] = true;
             top[vi] = v;
             fattest[vi] = distance[vi];
             roots.clear();
-            let mut upper = self.neighbours[self.start[vi]..self.start[vi + 1]]
-                .iter()
-                .filter(|&&u| added[u as usize] && u != v);
+            into.clear();
+            // Slots of v's edges to vertices above it.
+            let mut upper = (self.start[vi]..self.start[vi + 1])
+                .filter(|&s| added[self.neighbours[s] as usize]);
+            let mut new_cycles = 0;
             if matches!(
                 classification.classes[vi].kind,
                 VertexType::Saddle2 | VertexType::Degenerate
             ) {
-                for &u in upper {
-                    roots.push(find(&mut parent, u));
+                through.clear();
+                for slot in upper {
+                    let root = self.path_into(&mut forest, slot, &mut value);
+                    through.push((root, value.clone()));
                 }
-                roots.sort_unstable();
-                roots.dedup();
-            } else if let Some(&u) = upper.next() {
+                through.sort_by_key(|&(root, _)| root);
+                for (i, (root, path)) in through.iter().enumerate() {
+                    let first = through.iter().position(|(r, _)| r == root).unwrap_or(i);
+                    if first == i {
+                        roots.push(*root);
+                        into.extend_from_slice(path);
+                    } else if w > 0 {
+                        // Two ways down to v from one component: a cycle.
+                        let mut sum: Vec<u64> = path
+                            .iter()
+                            .zip(&through[first].1)
+                            .map(|(a, b)| a ^ b)
+                            .collect();
+                        if essential.insert(&self.cocycles.class(&mut sum)) {
+                            new_cycles += 1;
+                        }
+                    }
+                }
+            } else if let Some(slot) = upper.next() {
                 // One upper link component (regular, 1-saddle, minimum): its vertices
                 // are joined through the link's edges already, so one root is all.
-                roots.push(find(&mut parent, u));
+                roots.push(self.path_into(&mut forest, slot, &mut value));
+                into.extend_from_slice(&value);
             }
             if classification.classes[vi].kind == VertexType::Saddle2 {
                 let mut role = self.role_of(v, f, distance, &roots, &top, &fattest);
+                role.essential = role.role == SaddleRole::CycleClosing && new_cycles > 0;
                 if role.role == SaddleRole::CycleClosing {
                     if let Some(local) = ball.local_cycle(self, v, &added) {
                         role = local
@@ -183,28 +224,64 @@ impl Sweep {
                                     role: SaddleRole::LocalCycle,
                                     ..role
                                 },
-                                |r| RoleAt { vertex: v, ..r },
+                                |r| RoleAt {
+                                    vertex: v,
+                                    essential: false,
+                                    ..r
+                                },
                             );
                     }
                 }
                 role_of_vertex[vi] = roles.len() as u32;
                 roles.push(role);
             }
-            // Union: the component with the highest top survives as the root.
+            // Union: the component with the highest top survives as the root; a root
+            // that joins another takes the difference of v's path values into the two.
             let mut root = v;
-            for &r in &roots {
+            root_into.fill(0);
+            for (i, &r) in roots.iter().enumerate() {
+                let r_into = &into[i * w..(i + 1) * w];
                 let (keep, lose) = if above(f, top[r as usize], top[root as usize]) {
                     (r, root)
                 } else {
                     (root, r)
                 };
-                parent[lose as usize] = keep;
+                forest.parent[lose as usize] = keep;
+                for (k, d) in forest.offset_mut(lose).iter_mut().enumerate() {
+                    *d = root_into[k] ^ r_into[k];
+                }
                 fattest[keep as usize] = fattest[keep as usize].max(fattest[lose as usize]);
+                if keep == r {
+                    root_into.copy_from_slice(r_into);
+                }
                 root = keep;
             }
         }
         roles.sort_by_key(|r| r.vertex);
-        roles
+        Roles {
+            roles,
+            essential_cycles: essential.rank(),
+        }
+    }
+
+    /// Words of the path values kept during the sweep (0 when there is no class).
+    fn potential_words(&self) -> usize {
+        if self.cocycles.rank() == 0 {
+            0
+        } else {
+            self.cocycles.words()
+        }
+    }
+
+    /// For the edge at adjacency `slot` (from `v` up to `u`): the root of `u`'s
+    /// component, and in `value` the value of the path from that root down to `u` and
+    /// on to `v`.
+    fn path_into(&self, forest: &mut Forest, slot: usize, value: &mut [u64]) -> u32 {
+        let root = forest.find(self.neighbours[slot], value);
+        for (x, e) in value.iter_mut().zip(self.cocycles.value(slot)) {
+            *x ^= e;
+        }
+        root
     }
 
     /// The largest of `distance` over `v` and its neighbours.
@@ -232,6 +309,7 @@ impl Sweep {
                 younger_max: None,
                 bulge: None,
                 field_ratio: None,
+                essential: false,
             };
         }
         // The younger of the joined lobes: the lowest top among them.
@@ -262,6 +340,7 @@ impl Sweep {
             bulge,
             field_ratio: (younger != OUTER && f[v as usize] > 0.0)
                 .then(|| f[younger as usize] / f[v as usize]),
+            essential: false,
         }
     }
 }
@@ -352,11 +431,76 @@ fn above(f: &[f64], a: u32, b: u32) -> bool {
     }
 }
 
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        let up = parent[parent[x as usize] as usize];
-        parent[x as usize] = up;
-        x = up;
+/// The vertex adjacency of a tet mesh (its edges): per vertex `v`, its neighbours
+/// `neighbours[start[v]..start[v + 1]]`, sorted.
+pub(super) fn adjacency(mesh: &TetMesh) -> (Vec<usize>, Vec<u32>) {
+    let lists: Vec<Vec<u32>> = (0..mesh.num_vertices())
+        .into_par_iter()
+        .map(|v| {
+            let mut around: Vec<u32> = mesh
+                .vertex_tets(v)
+                .iter()
+                .flat_map(|&t| mesh.tets[t as usize])
+                .filter(|&u| u as usize != v)
+                .collect();
+            around.sort_unstable();
+            around.dedup();
+            around
+        })
+        .collect();
+    let mut start = Vec::with_capacity(lists.len() + 1);
+    start.push(0);
+    for n in &lists {
+        start.push(start.last().copied().unwrap_or(0) + n.len());
     }
-    x
+    (start, lists.concat())
+}
+
+/// Union–find over the vertices; beside each vertex's parent, the value of the path
+/// from the parent down to it (`words` words; none when there is no class).
+struct Forest {
+    parent: Vec<u32>,
+    words: usize,
+    offsets: Vec<u64>,
+    path: Vec<u32>,
+}
+
+impl Forest {
+    fn new(n: usize, words: usize) -> Forest {
+        Forest {
+            parent: (0..n as u32).collect(),
+            words,
+            offsets: vec![0; n * words],
+            path: Vec::new(),
+        }
+    }
+
+    fn offset_mut(&mut self, x: u32) -> &mut [u64] {
+        let w = self.words;
+        &mut self.offsets[x as usize * w..(x as usize + 1) * w]
+    }
+
+    /// The root of `x`, with the path value from the root down to `x` in `value`;
+    /// compresses the path.
+    fn find(&mut self, x: u32, value: &mut [u64]) -> u32 {
+        self.path.clear();
+        let mut root = x;
+        while self.parent[root as usize] != root {
+            self.path.push(root);
+            root = self.parent[root as usize];
+        }
+        value.fill(0);
+        let w = self.words;
+        // From the vertex next to the root down to x: each offset becomes the value
+        // from the root.
+        for i in (0..self.path.len()).rev() {
+            let y = self.path[i] as usize;
+            for (k, acc) in value.iter_mut().enumerate() {
+                *acc ^= self.offsets[y * w + k];
+                self.offsets[y * w + k] = *acc;
+            }
+            self.parent[y] = root;
+        }
+        root
+    }
 }

@@ -306,6 +306,14 @@ pub struct MorseCheck {
     pub surface_morse_expected: Option<i64>,
     /// The mesh's own expectation (χ of its subcomplexes).
     pub morse_expected: morse::MorseExpectation,
+    /// Whether the superlevel sweep kept `cycle_rank` essential cycles at every step
+    /// (each step's `cycles_ok`; a cycle closed by a saddle is essential when no
+    /// 1-saddle lower down fills it).
+    pub cycles_ok: bool,
+    /// The first Betti number (Z2) of the complex the sweep covers, from its cocycles:
+    /// the surface's genus when the interior vertices kept its topology (a warning
+    /// says when not).
+    pub cycle_rank: usize,
     /// Per-step counts and checks.
     pub steps: Vec<morse::StepSummary>,
 }
@@ -529,11 +537,36 @@ pub fn find_necks_with_progress(
             Side::Outside => report.timings.tunnels = Some(timings),
         }
 
+        let genus = surface_report
+            .component_details
+            .iter()
+            .map(|c| c.genus)
+            .sum::<Option<i64>>();
+        // The swept complex should have the surface's genus as its H1 rank, and the
+        // sweep should find every one of its classes at every level.
+        let cycle_rank = result.cycle_rank as i64;
+        if let Some(g) = genus.filter(|&g| g != cycle_rank) {
+            report.warnings.push(format!(
+                "{name}: the interior vertices of the volume mesh span a complex of H1 rank \
+                 {cycle_rank} (Z2), the surface has genus {g}: the superlevel sweep sees \
+                 cycles that are not the surface's (thin parts; --h may change it)"
+            ));
+        }
+        let cycle_failure = result.steps.iter().find(|s| !s.cycles_ok);
+        if let Some(s) = cycle_failure {
+            report.warnings.push(format!(
+                "{name}: the superlevel sweep keeps {} essential cycles at level {}, its \
+                 complex has H1 rank {cycle_rank}",
+                s.essential_cycles, s.step
+            ));
+        }
         report.morse.push(MorseCheck {
             side,
             ok: result.morse_failures().next().is_none(),
             surface_morse_expected: surface_morse_expected(&surface_report, side),
             morse_expected: result.morse_expected,
+            cycles_ok: cycle_failure.is_none(),
+            cycle_rank: result.cycle_rank,
             steps: result.steps.clone(),
         });
         // Loops of this side follow those already listed: shift duplicate references.
@@ -547,11 +580,6 @@ pub fn find_necks_with_progress(
                 d
             }));
         let classes: Vec<Vec<u64>> = found.loops.iter().map(NeckLoop::class).collect();
-        let genus = surface_report
-            .component_details
-            .iter()
-            .map(|c| c.genus)
-            .sum::<Option<i64>>();
         let rank = crate::mesh::z2_rank(&classes);
         let homology = HomologyCheck {
             genus,

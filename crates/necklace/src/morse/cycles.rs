@@ -1,0 +1,391 @@
+//! Which cycles of the superlevel sweep are essential: the first cohomology over Z2 of
+//! the complex the sweep covers (issue 13, "pair the noise cycles away").
+//!
+//! The sweep ([`roles`](super::roles)) adds the interior vertices from the top down, the
+//! outer sphere's vertices joined as one from the start; the surface's vertices are
+//! never added. So it covers `X`: the full subcomplex on the interior vertices, with
+//! the outer sphere coned off. `X` is the solid (inside) or the space around it
+//! (outside) up to a collar, and its first Betti number is the surface's total genus.
+//!
+//! A cycle-closing saddle closes a cycle of the superlevel set. By the elder rule that
+//! cycle lives for ever (is *essential*) exactly when its class in H₁(X; Z2) is
+//! independent of the classes of the cycles closed before it; otherwise a 1-saddle
+//! lower down fills it (it was noise, or a second copy of a cycle). The classes come
+//! from a basis of 1-cocycles (edge values whose sum round every triangle of `X` is 0),
+//! built once per mesh:
+//! 1. a spanning forest of `X`'s edges, grown breadth-first from the outer sphere (then
+//!    from the first unreached vertex of each other component), is set to 0, and so
+//!    are the outer sphere's own edges (the cone);
+//! 2. a triangle with one edge left unknown fixes it (the sum of its other two);
+//!    where no triangle does, the lowest unknown edge becomes a free *parameter*
+//!    (its value is a unit vector of Z2^P);
+//! 3. every triangle's sum is then a linear relation among the parameters; the
+//!    cocycles are the parameter values that satisfy them all.
+//!
+//! An edge's value is a vector of Z2^P; a cycle's is the sum over its edges, and its
+//! class is that sum reduced modulo the relations (echelon form), read on the
+//! parameters that lead no relation: [`Cocycles::rank`] coordinates, the dimension of
+//! H¹(X; Z2). Entry point: [`Cocycles::new`]. Sequential and ordered by index: the
+//! result does not depend on the thread count.
+
+use std::collections::VecDeque;
+
+use rayon::prelude::*;
+
+use crate::mesh::Z2Basis;
+use crate::tet::{TetMesh, VertexKind};
+
+/// Edge values of a cocycle basis of `X` (see the module doc).
+#[derive(Debug, Clone)]
+pub struct Cocycles {
+    /// Words per edge value (parameters ≤ 64 × words).
+    words: usize,
+    /// Per slot of the adjacency (`start`/`neighbours` of the sweep, both directions):
+    /// its edge's value, `words` words; zero when the edge is not in `X`.
+    values: Vec<u64>,
+    /// The relations among the parameters, in echelon form.
+    relations: Z2Basis,
+    /// Parameters that lead no relation: the class coordinates.
+    free: Vec<usize>,
+    /// Free parameters taken where no triangle fixed an edge.
+    pub parameters: usize,
+}
+
+/// How an edge's value was found.
+#[derive(Debug, Clone, Copy)]
+enum Source {
+    /// A free parameter (its index).
+    Parameter(u32),
+    /// The sum of the other two edges of this triangle.
+    Triangle(u32),
+}
+
+impl Cocycles {
+    /// The cocycle basis of `X` for `mesh`, whose vertex adjacency is `start` /
+    /// `neighbours` (per vertex, its neighbours sorted).
+    pub fn new(mesh: &TetMesh, start: &[usize], neighbours: &[u32]) -> Cocycles {
+        let n = mesh.num_vertices();
+        let in_x: Vec<bool> = mesh
+            .kinds
+            .iter()
+            .map(|&k| k != VertexKind::Surface)
+            .collect();
+        let outer: Vec<bool> = mesh.kinds.iter().map(|&k| k == VertexKind::Outer).collect();
+
+        // Edges of X, each once (from its lower end), numbered in slot order.
+        let mut edge_of_slot = vec![u32::MAX; neighbours.len()];
+        let mut ends: Vec<[u32; 2]> = Vec::new();
+        for v in 0..n {
+            if !in_x[v] {
+                continue;
+            }
+            for s in start[v]..start[v + 1] {
+                let u = neighbours[s] as usize;
+                if u > v && in_x[u] {
+                    edge_of_slot[s] = ends.len() as u32;
+                    ends.push([v as u32, u as u32]);
+                }
+            }
+        }
+        let edge = |a: u32, b: u32| -> u32 {
+            let (a, b) = (a.min(b) as usize, a.max(b));
+            let list = &neighbours[start[a]..start[a + 1]];
+            list.binary_search(&b)
+                .map_or(u32::MAX, |i| edge_of_slot[start[a] + i])
+        };
+
+        // Triangles of X (faces of tets with three vertices in X), each once.
+        let mut faces: Vec<[u32; 3]> = mesh
+            .tets
+            .par_iter()
+            .flat_map_iter(|t| {
+                [
+                    [t[0], t[1], t[2]],
+                    [t[0], t[1], t[3]],
+                    [t[0], t[2], t[3]],
+                    [t[1], t[2], t[3]],
+                ]
+                .into_iter()
+                .filter(|f| f.iter().all(|&v| in_x[v as usize]))
+                .map(|mut f| {
+                    f.sort_unstable();
+                    f
+                })
+            })
+            .collect();
+        faces.par_sort_unstable();
+        faces.dedup();
+        let triangles: Vec<[u32; 3]> = faces
+            .par_iter()
+            .map(|&[a, b, c]| [edge(a, b), edge(a, c), edge(b, c)])
+            .collect();
+        drop(faces);
+
+        // 1. The gauge: a spanning forest and the cone's edges are 0.
+        let mut known = vec![false; ends.len()];
+        for (e, &[a, b]) in ends.iter().enumerate() {
+            known[e] = outer[a as usize] && outer[b as usize];
+        }
+        let mut reached = outer.clone();
+        let mut queue: VecDeque<usize> = (0..n).filter(|&v| outer[v]).collect();
+        let mut next_root = 0;
+        loop {
+            while let Some(v) = queue.pop_front() {
+                for &u in &neighbours[start[v]..start[v + 1]] {
+                    let u = u as usize;
+                    if in_x[u] && !reached[u] {
+                        reached[u] = true;
+                        known[edge(v as u32, u as u32) as usize] = true;
+                        queue.push_back(u);
+                    }
+                }
+            }
+            while next_root < n && (!in_x[next_root] || reached[next_root]) {
+                next_root += 1;
+            }
+            if next_root == n {
+                break;
+            }
+            reached[next_root] = true;
+            queue.push_back(next_root);
+        }
+
+        // 2. Fix edges triangle by triangle; a parameter where none can.
+        let mut incident_start = vec![0usize; ends.len() + 1];
+        for t in &triangles {
+            for &e in t {
+                incident_start[e as usize + 1] += 1;
+            }
+        }
+        for e in 0..ends.len() {
+            incident_start[e + 1] += incident_start[e];
+        }
+        let mut incident = vec![0u32; incident_start[ends.len()]];
+        let mut fill = incident_start.clone();
+        for (i, t) in triangles.iter().enumerate() {
+            for &e in t {
+                incident[fill[e as usize]] = i as u32;
+                fill[e as usize] += 1;
+            }
+        }
+        drop(fill);
+        let mut unknown: Vec<u8> = triangles
+            .iter()
+            .map(|t| t.iter().filter(|&&e| !known[e as usize]).count() as u8)
+            .collect();
+        let mut ready: Vec<u32> = (0..triangles.len() as u32)
+            .filter(|&t| unknown[t as usize] == 1)
+            .collect();
+        let mut order: Vec<(u32, Source)> = Vec::new();
+        let mut parameters = 0u32;
+        let mut next_free = 0;
+        let mut settle = |e: u32,
+                          source: Source,
+                          known: &mut [bool],
+                          unknown: &mut [u8],
+                          ready: &mut Vec<u32>| {
+            known[e as usize] = true;
+            order.push((e, source));
+            for &t in &incident[incident_start[e as usize]..incident_start[e as usize + 1]] {
+                unknown[t as usize] -= 1;
+                if unknown[t as usize] == 1 {
+                    ready.push(t);
+                }
+            }
+        };
+        loop {
+            while let Some(t) = ready.pop() {
+                if unknown[t as usize] != 1 {
+                    continue;
+                }
+                let Some(&e) = triangles[t as usize].iter().find(|&&e| !known[e as usize]) else {
+                    continue;
+                };
+                settle(e, Source::Triangle(t), &mut known, &mut unknown, &mut ready);
+            }
+            while next_free < ends.len() && known[next_free] {
+                next_free += 1;
+            }
+            if next_free == ends.len() {
+                break;
+            }
+            settle(
+                next_free as u32,
+                Source::Parameter(parameters),
+                &mut known,
+                &mut unknown,
+                &mut ready,
+            );
+            parameters += 1;
+        }
+
+        // The values, in the order they were found.
+        let words = (parameters as usize).div_ceil(64);
+        let mut values = vec![0u64; ends.len() * words];
+        for &(e, source) in &order {
+            let e = e as usize;
+            match source {
+                Source::Parameter(p) => {
+                    let p = p as usize;
+                    values[e * words + p / 64] |= 1 << (p % 64);
+                }
+                Source::Triangle(t) => {
+                    for &other in &triangles[t as usize] {
+                        let other = other as usize;
+                        if other != e {
+                            for w in 0..words {
+                                values[e * words + w] ^= values[other * words + w];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+
+        // Per slot, from both ends.
+        let mut slot_values = vec![0u64; neighbours.len() * words];
+        if words > 0 {
+            for v in 0..n {
+                for s in start[v]..start[v + 1] {
+                    let e = edge(v as u32, neighbours[s]);
+                    if e != u32::MAX {
+                        let e = e as usize;
+                        slot_values[s * words..(s + 1) * words]
+                            .copy_from_slice(&values[e * words..(e + 1) * words]);
+                    }
+                }
+            }
+        }
+
+        // 3. Every triangle's sum is a relation among the parameters.
+        let mut relations = Z2Basis::default();
+        if words > 0 {
+            let mut sum = vec![0u64; words];
+            for t in &triangles {
+                sum.fill(0);
+                for &e in t {
+                    for (x, v) in sum.iter_mut().zip(&values[e as usize * words..]) {
+                        *x ^= v;
+                    }
+                }
+                if sum.iter().any(|&x| x != 0) {
+                    relations.insert(&sum);
+                }
+            }
+        }
+        let mut leads = vec![false; parameters as usize];
+        for lead in relations.leads() {
+            leads[lead] = true;
+        }
+        let free = (0..parameters as usize).filter(|&p| !leads[p]).collect();
+        Cocycles {
+            words,
+            values: slot_values,
+            relations,
+            free,
+            parameters: parameters as usize,
+        }
+    }
+
+    /// The dimension of H¹(X; Z2): the number of class coordinates.
+    pub fn rank(&self) -> usize {
+        self.free.len()
+    }
+
+    /// Words of an edge value (and of a cycle's sum).
+    pub fn words(&self) -> usize {
+        self.words
+    }
+
+    /// The value of the edge at adjacency slot `slot` (either end's slot).
+    pub fn value(&self, slot: usize) -> &[u64] {
+        &self.values[slot * self.words..(slot + 1) * self.words]
+    }
+
+    /// The class in H₁(X; Z2) of a cycle whose edge values sum to `sum` (consumed):
+    /// [`Cocycles::rank`] bits, packed in words.
+    pub fn class(&self, sum: &mut [u64]) -> Vec<u64> {
+        self.relations.reduce(sum);
+        let mut class = vec![0u64; self.rank().div_ceil(64)];
+        for (i, &p) in self.free.iter().enumerate() {
+            if sum[p / 64] >> (p % 64) & 1 == 1 {
+                class[i / 64] |= 1 << (i % 64);
+            }
+        }
+        class
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::roles::adjacency;
+    use super::*;
+
+    /// A solid torus: a ring of `k` triangular prisms (each split into 3 tets), all
+    /// vertices interior, so that `X` is the whole mesh.
+    fn solid_ring(k: usize) -> TetMesh {
+        let mut positions = Vec::new();
+        for i in 0..k {
+            let a = std::f64::consts::TAU * i as f64 / k as f64;
+            for j in 0..3 {
+                let b = std::f64::consts::TAU * j as f64 / 3.0;
+                let r = 2.0 + 0.5 * b.cos();
+                positions.push([r * a.cos(), r * a.sin(), 0.5 * b.sin()]);
+            }
+        }
+        let id = |i: usize, j: usize| (3 * (i % k) + j) as u32;
+        let mut tets = Vec::new();
+        for i in 0..k {
+            let (a0, a1, a2) = (id(i, 0), id(i, 1), id(i, 2));
+            let (b0, b1, b2) = (id(i + 1, 0), id(i + 1, 1), id(i + 1, 2));
+            tets.push([a0, a1, a2, b0]);
+            tets.push([a1, a2, b0, b1]);
+            tets.push([a2, b0, b1, b2]);
+        }
+        let kinds = vec![VertexKind::Interior; positions.len()];
+        TetMesh::new(positions, tets, kinds).unwrap()
+    }
+
+    /// The sum of the edge values round a closed vertex path.
+    fn cycle_sum(c: &Cocycles, start: &[usize], nb: &[u32], path: &[u32]) -> Vec<u64> {
+        let mut sum = vec![0u64; c.words()];
+        for i in 0..path.len() {
+            let (a, b) = (path[i] as usize, path[(i + 1) % path.len()]);
+            let slot = start[a] + nb[start[a]..start[a + 1]].binary_search(&b).unwrap();
+            let v = c.value(slot);
+            for (x, y) in sum.iter_mut().zip(v) {
+                *x ^= y;
+            }
+        }
+        sum
+    }
+
+    #[test]
+    fn a_solid_ring_has_one_class_and_its_core_carries_it() {
+        let mesh = solid_ring(8);
+        let (start, nb) = adjacency(&mesh);
+        let c = Cocycles::new(&mesh, &start, &nb);
+        assert_eq!(c.rank(), 1);
+        // Round the ring once: the class; round a triangle of a prism: nothing.
+        let core: Vec<u32> = (0..8).map(|i| 3 * i).collect();
+        assert_eq!(c.class(&mut cycle_sum(&c, &start, &nb, &core)), vec![1]);
+        assert_eq!(
+            c.class(&mut cycle_sum(&c, &start, &nb, &[0, 1, 2])),
+            vec![0]
+        );
+        // Two ways round the ring differ by a boundary.
+        let other: Vec<u32> = (0..8).map(|i| 3 * i + 2).collect();
+        assert_eq!(c.class(&mut cycle_sum(&c, &start, &nb, &other)), vec![1]);
+    }
+
+    #[test]
+    fn a_ball_has_no_class() {
+        // One prism of the ring: a ball.
+        let ring = solid_ring(8);
+        let tets: Vec<[u32; 4]> = ring.tets[..3].to_vec();
+        let mesh = TetMesh::new(ring.positions.clone(), tets, ring.kinds.clone()).unwrap();
+        let (start, nb) = adjacency(&mesh);
+        let c = Cocycles::new(&mesh, &start, &nb);
+        assert_eq!(c.rank(), 0);
+    }
+}
