@@ -25,7 +25,10 @@
 //!    a vertex only) are undone by dropping the smaller side; their places are returned
 //!    ([`VolumeMesh::pinches`]) so a caller can refine there and mesh again (the
 //!    pipeline does, while the topology differs from the surface's). Boundary vertices
-//!    the tets closed round become interior ([`VolumeMesh::swallowed`]).
+//!    the tets closed round become interior ([`VolumeMesh::swallowed`]). Then `chords`:
+//!    an edge between two boundary vertices across the inside (a part about one cell
+//!    thick) is split at its midpoint, so that the interior vertices keep the region's
+//!    topology (the Morse analysis sweeps them, the boundary held fixed).
 //! 5. `features`: boundary vertices near the domain's sharp corners and creases
 //!    ([`Domain::sharp_features`]) are moved onto them, so small polyhedral parts keep
 //!    their volume.
@@ -38,6 +41,7 @@
 //! set). Entry point: [`stuff_volume`].
 
 mod background;
+mod chords;
 mod csr;
 mod features;
 mod octree;
@@ -207,6 +211,9 @@ pub struct StuffingStats {
     pub exposed_vertices: usize,
     /// Boundary vertices enclosed by tets, now interior (see [`VolumeMesh::swallowed`]).
     pub swallowed_vertices: usize,
+    /// Edges between two boundary vertices across the inside, split at their midpoint
+    /// so that the interior vertices keep the region's topology (`chords`).
+    pub chords_split: usize,
     /// Boundary vertices moved onto a sharp corner or crease.
     pub snapped_vertices: usize,
     /// What the quality step did.
@@ -317,6 +324,9 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     };
     let pinches = repair.sites.iter().map(site).collect();
     let swallowed = repair.buried.iter().map(site).collect();
+    // Edges across parts about a cell thick: an interior vertex at each midpoint.
+    let chords_split =
+        chords::split_chords(&mut stuffed.positions, &mut stuffed.tets, &mut interior);
     lap(4);
 
     // 5. Sharp features: boundary vertices onto the corners and creases.
@@ -383,6 +393,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             pinch_tets_removed: repair.removed_tets,
             exposed_vertices: repair.exposed.len(),
             swallowed_vertices: repair.buried.len(),
+            chords_split,
             snapped_vertices: snapped.iter().filter(|&&x| x).count(),
             quality,
             seconds,

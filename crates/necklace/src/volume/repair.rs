@@ -137,7 +137,7 @@ fn volume(positions: &[[f64; 3]], t: &[u32; 4]) -> f64 {
 }
 
 /// Sorted runs of equal items: calls `f(item, count)` once per distinct item.
-fn runs<T: PartialEq + Copy>(sorted: &[T], mut f: impl FnMut(T, usize)) {
+pub(super) fn runs<T: PartialEq + Copy>(sorted: &[T], mut f: impl FnMut(T, usize)) {
     let mut i = 0;
     while i < sorted.len() {
         let mut j = i + 1;
@@ -150,7 +150,7 @@ fn runs<T: PartialEq + Copy>(sorted: &[T], mut f: impl FnMut(T, usize)) {
 }
 
 /// The four faces of a tet, each with sorted vertices.
-fn faces_of(t: &[u32; 4]) -> [[u32; 3]; 4] {
+pub(super) fn faces_of(t: &[u32; 4]) -> [[u32; 3]; 4] {
     let mut s = *t;
     s.sort_unstable();
     [
