@@ -150,7 +150,7 @@ impl Sweep {
             added[v as usize] = true;
             match first_outer {
                 None => first_outer = Some(v),
-                Some(o) => forest.parent[v as usize] = o,
+                Some(o) => forest.join(v, o),
             }
         }
         let mut roles = Vec::new();
@@ -246,7 +246,7 @@ impl Sweep {
                 } else {
                     (root, r)
                 };
-                forest.parent[lose as usize] = keep;
+                forest.join(lose, keep);
                 for (k, d) in forest.offset_mut(lose).iter_mut().enumerate() {
                     *d = root_into[k] ^ r_into[k];
                 }
@@ -457,50 +457,55 @@ pub(super) fn adjacency(mesh: &TetMesh) -> (Vec<usize>, Vec<u32>) {
 }
 
 /// Union–find over the vertices; beside each vertex's parent, the value of the path
-/// from the parent down to it (`words` words; none when there is no class).
+/// from the parent down to it (`words` words; none when there is no class). Both sit
+/// in one record per vertex, `1 + words` words, so a step up the tree reads one place.
 struct Forest {
-    parent: Vec<u32>,
     words: usize,
-    offsets: Vec<u64>,
-    path: Vec<u32>,
+    records: Vec<u64>,
 }
 
 impl Forest {
     fn new(n: usize, words: usize) -> Forest {
-        Forest {
-            parent: (0..n as u32).collect(),
-            words,
-            offsets: vec![0; n * words],
-            path: Vec::new(),
+        let mut records = vec![0u64; n * (1 + words)];
+        for x in 0..n {
+            records[x * (1 + words)] = x as u64;
         }
+        Forest { words, records }
+    }
+
+    fn parent(&self, x: u32) -> u32 {
+        self.records[x as usize * (1 + self.words)] as u32
+    }
+
+    /// Make `root` (a root) a child of `parent`; its value is set with `offset_mut`.
+    fn join(&mut self, root: u32, parent: u32) {
+        self.records[root as usize * (1 + self.words)] = u64::from(parent);
     }
 
     fn offset_mut(&mut self, x: u32) -> &mut [u64] {
-        let w = self.words;
-        &mut self.offsets[x as usize * w..(x as usize + 1) * w]
+        let at = x as usize * (1 + self.words) + 1;
+        &mut self.records[at..at + self.words]
     }
 
     /// The root of `x`, with the path value from the root down to `x` in `value`;
-    /// compresses the path.
-    fn find(&mut self, x: u32, value: &mut [u64]) -> u32 {
-        self.path.clear();
-        let mut root = x;
-        while self.parent[root as usize] != root {
-            self.path.push(root);
-            root = self.parent[root as usize];
-        }
+    /// halves the path (each vertex on it skips to its grandparent, its value
+    /// summed with its parent's).
+    fn find(&mut self, mut x: u32, value: &mut [u64]) -> u32 {
         value.fill(0);
-        let w = self.words;
-        // From the vertex next to the root down to x: each offset becomes the value
-        // from the root.
-        for i in (0..self.path.len()).rev() {
-            let y = self.path[i] as usize;
-            for (k, acc) in value.iter_mut().enumerate() {
-                *acc ^= self.offsets[y * w + k];
-                self.offsets[y * w + k] = *acc;
+        let stride = 1 + self.words;
+        loop {
+            let p = self.parent(x);
+            if p == x {
+                return x;
             }
-            self.parent[y] = root;
+            let up = self.parent(p);
+            let (xi, pi) = (x as usize * stride, p as usize * stride);
+            for k in 1..stride {
+                self.records[xi + k] ^= self.records[pi + k];
+                value[k - 1] ^= self.records[xi + k];
+            }
+            self.records[xi] = u64::from(up);
+            x = up;
         }
-        root
     }
 }
