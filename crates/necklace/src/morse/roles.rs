@@ -186,20 +186,35 @@ impl Sweep {
                 }
                 through.sort_by_key(|&(root, _)| root);
                 for (i, (root, path)) in through.iter().enumerate() {
-                    let first = through.iter().position(|(r, _)| r == root).unwrap_or(i);
-                    if first == i {
+                    if through.iter().position(|(r, _)| r == root) == Some(i) {
                         roots.push(*root);
                         into.extend_from_slice(path);
-                    } else if w > 0 {
-                        // Two ways down to v from one component: a cycle.
-                        let mut sum: Vec<u64> = path
-                            .iter()
-                            .zip(&through[first].1)
-                            .map(|(a, b)| a ^ b)
-                            .collect();
-                        if essential.insert(&self.cocycles.class(&mut sum)) {
-                            new_cycles += 1;
-                        }
+                    }
+                }
+                // Each upper link component beyond one per root can close a cycle; look
+                // for that many new classes among the ways down from one component.
+                let can_close = classification.classes[vi].upper as usize;
+                let mut open = can_close.saturating_sub(roots.len());
+                if w == 0 {
+                    open = 0;
+                }
+                for (i, (root, path)) in through.iter().enumerate() {
+                    if open == 0 {
+                        break;
+                    }
+                    let first = through.iter().position(|(r, _)| r == root).unwrap_or(i);
+                    if first == i || *path == through[first].1 {
+                        continue;
+                    }
+                    // Two ways down to v from one component: a cycle.
+                    let mut sum: Vec<u64> = path
+                        .iter()
+                        .zip(&through[first].1)
+                        .map(|(a, b)| a ^ b)
+                        .collect();
+                    if essential.insert(&self.cocycles.class(&mut sum)) {
+                        new_cycles += 1;
+                        open -= 1;
                     }
                 }
             } else if let Some(slot) = upper.next() {
