@@ -69,8 +69,11 @@ pub struct HeatSolver {
     history: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
-/// Solutions kept for the initial guess.
-const HISTORY: usize = 3;
+/// Solutions kept for the initial guess. On the scale space (32 solves with growing
+/// `τ`) six instead of three cut the CG iterations by 28–33 % (boot: 3892 → 2805
+/// inside, 2337 → 1564 outside); more than about eight gain nothing, as the stored
+/// solutions become nearly dependent.
+const HISTORY: usize = 6;
 
 impl HeatSolver {
     /// Assemble the reduced system. `stiffness` is `L` (positive semidefinite), `mass`
