@@ -5,7 +5,10 @@ mod common;
 
 use common::{Inside, Shell};
 
-use necklace::morse::{classify, VertexType};
+use necklace::morse::{
+    classify, cotangent_stiffness, implicit_step, lumped_mass, Classification, LinkSides, Links,
+    SolverOptions, VertexType,
+};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::volume::{stuff_volume, StuffingOptions};
 use necklace::{TetMesh, VertexKind};
@@ -71,4 +74,42 @@ fn the_morse_sum_outside_is_the_genus() {
         let c = classify(&m, &distance_field(&shape, &m)).unwrap();
         assert_eq!(c.morse_sum, genus, "{kind}");
     }
+}
+
+#[test]
+fn classifying_a_sequence_of_fields_again_gives_what_classifying_each_gives() {
+    let shape = Shape::new(ShapeKind::Eight);
+    let m = stuff_volume(&Inside(shape.clone()), &StuffingOptions::new(0.07))
+        .unwrap()
+        .mesh;
+    let links = Links::new(&m).unwrap();
+    let stiffness = cotangent_stiffness(&m);
+    let mass = lumped_mass(&m);
+    let fixed: Vec<bool> = m.kinds.iter().map(|&k| k != VertexKind::Interior).collect();
+    let mut sides = LinkSides::default();
+    let mut f = distance_field(&shape, &m);
+    let mut previous: Option<Classification> = None;
+    let mut changed = 0;
+    for level in 0..6 {
+        // Heat steps: most links keep their order from one field to the next, and the
+        // noise of the raw distance field's critical points goes away.
+        if level > 0 {
+            f = implicit_step(
+                &stiffness,
+                &mass,
+                &fixed,
+                &f,
+                2e-4,
+                &SolverOptions::default(),
+            )
+            .0;
+        }
+        let again = links.classify_again(&f, &mut sides);
+        assert_eq!(again, links.classify(&f), "level {level}");
+        if previous.is_some_and(|p| p.classes != again.classes) {
+            changed += 1;
+        }
+        previous = Some(again);
+    }
+    assert!(changed > 0, "the fields must change some classes");
 }

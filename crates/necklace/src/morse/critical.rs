@@ -15,7 +15,10 @@
 //! surface comes first and the outer sphere last, the sum over interior vertices is
 //! χ(K_{S∪I}) − χ(K_S) ([`expected_morse_sum`]): for a connected genus-g surface, g − 1
 //! inside and g outside. Entry points: [`Links::new`] once per mesh, then
-//! [`Links::classify`] per field ([`classify`] does both).
+//! [`Links::classify`] per field ([`classify`] does both), or
+//! [`Links::classify_again`] for a sequence of fields (the smoothing levels): a vertex
+//! whose link vertices all lie on the same sides of it as at the previous field keeps
+//! its class, since the class depends on nothing else.
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -135,6 +138,25 @@ pub struct Links {
     triangles: Vec<[u16; 3]>,
 }
 
+/// Which link vertices lay below each vertex at the last field
+/// [`Links::classify_again`] saw, and the classes it gave (empty before the first).
+#[derive(Debug, Clone, Default)]
+pub struct LinkSides {
+    words: Vec<u64>,
+    classes: Vec<VertexClass>,
+}
+
+/// The side word of a link too long for one (bit 63 is never a vertex's).
+const UNTRACKED: u64 = 1 << 63;
+
+/// The class of a vertex that is not interior.
+const BOUNDARY: VertexClass = VertexClass {
+    kind: VertexType::Boundary,
+    upper: 0,
+    lower: 0,
+    euler_term: 0,
+};
+
 /// One vertex's link in local indices.
 struct Link {
     vertices: Vec<u32>,
@@ -192,12 +214,7 @@ impl Links {
                 if self.kinds[v] == VertexKind::Interior {
                     self.classify_vertex(v, f, s)
                 } else {
-                    VertexClass {
-                        kind: VertexType::Boundary,
-                        upper: 0,
-                        lower: 0,
-                        euler_term: 0,
-                    }
+                    BOUNDARY
                 }
             })
             .collect();
@@ -221,6 +238,50 @@ impl Links {
             std::cmp::Ordering::Greater => false,
             std::cmp::Ordering::Equal => a < b,
         }
+    }
+
+    /// [`classify`](Self::classify) for the next field of a sequence: `sides` holds
+    /// which link vertices were below each vertex at the previous call (empty at the
+    /// first), and a vertex whose sides did not change keeps its class from there
+    /// without joining its link again. The result is exactly that of
+    /// [`classify`](Self::classify); `sides` is updated for the next call.
+    pub fn classify_again(&self, f: &[f64], sides: &mut LinkSides) -> Classification {
+        let n = self.num_vertices();
+        let fresh = sides.words.len() != n;
+        let previous = std::mem::take(sides);
+        let (words, classes): (Vec<u64>, Vec<VertexClass>) = (0..n)
+            .into_par_iter()
+            .map_init(Scratch::default, |s, v| {
+                if self.kinds[v] != VertexKind::Interior {
+                    return (0, BOUNDARY);
+                }
+                let word = self.side_word(v, f);
+                let same = !fresh && word != UNTRACKED && previous.words[v] == word;
+                if same {
+                    (word, previous.classes[v])
+                } else {
+                    (word, self.classify_vertex(v, f, s))
+                }
+            })
+            .unzip();
+        let morse_sum = classes.iter().map(|c| i64::from(c.euler_term)).sum();
+        *sides = LinkSides {
+            words,
+            classes: classes.clone(),
+        };
+        Classification { classes, morse_sum }
+    }
+
+    /// Bit `i` set when link vertex `i` of `v` is below it; [`UNTRACKED`] for a link
+    /// of more than 63 vertices.
+    fn side_word(&self, v: usize, f: &[f64]) -> u64 {
+        let vertices = &self.vertices[self.vertex_start[v]..self.vertex_start[v + 1]];
+        if vertices.len() > 63 {
+            return UNTRACKED;
+        }
+        vertices.iter().enumerate().fold(0u64, |word, (i, &u)| {
+            word | (u64::from(self.below(f, u as usize, v)) << i)
+        })
     }
 
     fn classify_vertex(&self, v: usize, f: &[f64], s: &mut Scratch) -> VertexClass {

@@ -62,7 +62,8 @@ use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 
 pub use critical::{
-    classify, expected_morse_sum, Classification, Links, MorseExpectation, VertexClass, VertexType,
+    classify, expected_morse_sum, Classification, LinkSides, Links, MorseExpectation, VertexClass,
+    VertexType,
 };
 pub use hessian::{hessian_at, Hessian};
 pub use laplacian::{cotangent_stiffness, lumped_mass, SparseMatrix};
@@ -419,6 +420,7 @@ pub fn analyze_with_progress(
     let first_tau = plan.first().map_or(0.0, |p| p.tau);
     let mut solver = HeatSolver::new(&stiffness, &mass, &fixed, field, first_tau, options.solver);
     let links = Links::new(mesh)?;
+    let mut sides = LinkSides::default();
     let sweep = Sweep::new(mesh);
     let morse_expected = expected_morse_sum(mesh);
     let mut timings = MorseTimings {
@@ -449,7 +451,7 @@ pub fn analyze_with_progress(
             continue;
         }
         let start = Instant::now();
-        let classification = links.classify(&f);
+        let classification = links.classify_again(&f, &mut sides);
         timings.classification += start.elapsed().as_secs_f64();
         let start = Instant::now();
         let critical = critical_points(mesh, &classification, options.track_radius);
