@@ -152,4 +152,52 @@ mod smoothing {
         };
         assert_eq!(run(1), run(3));
     }
+
+    #[test]
+    fn more_stored_solutions_give_the_same_fields_in_fewer_iterations() {
+        use necklace::morse::HeatSolver;
+        let m = torus_mesh();
+        let (l, mass, fixed) = (cotangent_stiffness(&m), lumped_mass(&m), boundary(&m));
+        let f: Vec<f64> = m
+            .positions
+            .iter()
+            .zip(&fixed)
+            .map(|(p, &b)| {
+                if b {
+                    0.0
+                } else {
+                    1.0 + (9.0 * p[0]).sin() * p[1]
+                }
+            })
+            .collect();
+        // A scale-space sequence: heat times t_k growing geometrically, τ_k = t_k − t_{k−1}.
+        let run = |history: usize| {
+            let options = SolverOptions {
+                history: Some(history),
+                ..SolverOptions::default()
+            };
+            let mut solver = HeatSolver::new(&l, &mass, &fixed, &f, 1e-4, options);
+            let (mut g, mut iterations, mut previous_t) = (f.clone(), 0, 0.0);
+            for k in 0..12 {
+                let t = 1e-4 * 1.5f64.powi(k);
+                solver.set_tau(t - previous_t);
+                previous_t = t;
+                let (next, report) = solver.step(&g);
+                assert!(report.converged, "{report:?}");
+                iterations += report.iterations;
+                g = next;
+            }
+            (g, iterations)
+        };
+        let (one, few) = (run(1), run(6));
+        for (a, b) in one.0.iter().zip(&few.0) {
+            assert!((a - b).abs() < 1e-7, "{a} against {b}");
+        }
+        assert!(
+            few.1 < one.1,
+            "{} iterations with six, {} with one",
+            few.1,
+            one.1
+        );
+    }
 }

@@ -119,9 +119,14 @@ pub struct MorseOptions {
     /// Matching radius of the tracking, in multiples of the mean edge length at the
     /// critical point (default 2).
     pub track_radius: f64,
-    /// The linear solver's stopping rule.
+    /// The linear solver's stopping rule and warm start (its `history` left at `None`
+    /// takes six stored solutions on the scale space, three on the paper schedule).
     pub solver: SolverOptions,
 }
+
+/// Solutions the paper schedule's solver keeps for its initial guess: three, as when
+/// that schedule was the default, so that it gives the same saddles as then.
+const PAPER_HISTORY: usize = 3;
 
 impl Default for MorseOptions {
     fn default() -> Self {
@@ -418,7 +423,14 @@ pub fn analyze_with_progress(
     let rescaled = (0..mesh.num_vertices()).all(|v| !fixed[v] || field[v] == 0.0);
     let plan = plan_steps(mesh, options);
     let first_tau = plan.first().map_or(0.0, |p| p.tau);
-    let mut solver = HeatSolver::new(&stiffness, &mass, &fixed, field, first_tau, options.solver);
+    let solver_options = SolverOptions {
+        history: options.solver.history.or(match options.schedule {
+            Schedule::ScaleSpace => None,
+            Schedule::Paper => Some(PAPER_HISTORY),
+        }),
+        ..options.solver
+    };
+    let mut solver = HeatSolver::new(&stiffness, &mass, &fixed, field, first_tau, solver_options);
     let links = Links::new(mesh)?;
     let mut sides = LinkSides::default();
     let sweep = Sweep::new(mesh);

@@ -14,13 +14,17 @@ use serde::Serialize;
 
 use super::laplacian::SparseMatrix;
 
-/// Stopping rule of the conjugate-gradient solve.
+/// Stopping rule and warm start of the conjugate-gradient solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverOptions {
     /// Relative residual `|r| / |b|` at which to stop (default 1e-10).
     pub tolerance: f64,
     /// Iteration cap (default 2000).
     pub max_iterations: usize,
+    /// Solutions kept for the initial guess, at least 1 (default `None`: six; the
+    /// Morse stage's paper schedule takes three, as its first runs did, so that it
+    /// reproduces them: the choice moves saddles near its persistence threshold).
+    pub history: Option<usize>,
 }
 
 impl Default for SolverOptions {
@@ -28,6 +32,7 @@ impl Default for SolverOptions {
         SolverOptions {
             tolerance: 1e-10,
             max_iterations: 2000,
+            history: None,
         }
     }
 }
@@ -195,7 +200,8 @@ impl HeatSolver {
         for (&v, &value) in self.free.iter().zip(&x) {
             out[v as usize] = value;
         }
-        if self.history.len() == HISTORY {
+        let kept = self.options.history.unwrap_or(HISTORY).max(1);
+        while self.history.len() >= kept {
             self.history.remove(0);
         }
         self.history.push((x, b));
