@@ -94,6 +94,21 @@ mod smoothing {
         m.kinds.iter().map(|&k| k != VertexKind::Interior).collect()
     }
 
+    /// A bumpy field that is zero on the boundary.
+    fn bumpy_field(m: &TetMesh, fixed: &[bool]) -> Vec<f64> {
+        m.positions
+            .iter()
+            .zip(fixed)
+            .map(|(p, &b)| {
+                if b {
+                    0.0
+                } else {
+                    (7.0 * p[0]).sin() * (5.0 * p[1]).cos() + 1.0
+                }
+            })
+            .collect()
+    }
+
     #[test]
     fn a_linear_field_with_its_boundary_values_is_a_fixed_point() {
         let m = torus_mesh();
@@ -114,19 +129,7 @@ mod smoothing {
     fn a_step_lowers_the_dirichlet_energy_and_keeps_boundary_values() {
         let m = torus_mesh();
         let (l, mass, fixed) = (cotangent_stiffness(&m), lumped_mass(&m), boundary(&m));
-        // A bumpy field that is zero on the boundary.
-        let f: Vec<f64> = m
-            .positions
-            .iter()
-            .zip(&fixed)
-            .map(|(p, &b)| {
-                if b {
-                    0.0
-                } else {
-                    (7.0 * p[0]).sin() * (5.0 * p[1]).cos() + 1.0
-                }
-            })
-            .collect();
+        let f = bumpy_field(&m, &fixed);
         let energy = |x: &[f64]| -> f64 { x.iter().zip(l.mul_vec(x)).map(|(a, b)| a * b).sum() };
         let (g, report) = implicit_step(&l, &mass, &fixed, &f, 0.01, &SolverOptions::default());
         assert!(report.converged && report.iterations > 0, "{report:?}");
@@ -158,18 +161,7 @@ mod smoothing {
         use necklace::morse::HeatSolver;
         let m = torus_mesh();
         let (l, mass, fixed) = (cotangent_stiffness(&m), lumped_mass(&m), boundary(&m));
-        let f: Vec<f64> = m
-            .positions
-            .iter()
-            .zip(&fixed)
-            .map(|(p, &b)| {
-                if b {
-                    0.0
-                } else {
-                    1.0 + (9.0 * p[0]).sin() * p[1]
-                }
-            })
-            .collect();
+        let f = bumpy_field(&m, &fixed);
         // A scale-space sequence: heat times t_k growing geometrically, τ_k = t_k − t_{k−1}.
         let run = |history: usize| {
             let options = SolverOptions {
