@@ -140,6 +140,7 @@ pub struct Links {
 
 /// Which link vertices lay below each vertex at the last field
 /// [`Links::classify_again`] saw, and the classes it gave (empty before the first).
+/// Keep one per [`Links`]: sides taken from another mesh give wrong classes.
 #[derive(Debug, Clone, Default)]
 pub struct LinkSides {
     words: Vec<u64>,
