@@ -10,6 +10,10 @@
 //!    and the plane passes under them), parallel planes up to
 //!    [`LoopOptions::plane_offsets`] steps of [`LoopOptions::offset_step`] × diagonal
 //!    away are tried, nearest first (+ before −), for a curve around the saddle's axis.
+//!    Before those parallel planes, [`membrane`] builds the boundary of the saddle's
+//!    membrane (its descending disk for the exact distance) and keeps it when it goes
+//!    once around the saddle's axis ([`LoopOptions::membranes`]); each loop says which
+//!    construction gave it (`initial`).
 //! 2. [`tighten`](mod@tighten): shorten it into a closed geodesic, not tied to mesh edges. A loop that
 //!    collapses (slides off a cap) or does not settle is dropped with its reason.
 //! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; keep
@@ -29,18 +33,23 @@
 
 pub mod classes;
 pub mod cut;
+pub mod membrane;
 pub mod tighten;
 
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, cross, dot, norm, scale, sub};
 use crate::mesh::{HomologyBasis, SurfaceMesh, Topology, Z2Basis};
 use crate::progress::{Progress, Silent};
 use cut::{closed_length, loop_around, plane_basis, plane_cut, Plane};
+use membrane::membrane_loop;
+pub use membrane::{MembraneFailure, MembraneOptions};
 use tighten::{tighten, SurfaceGeometry};
 pub use tighten::{SurfacePoint, TightenOptions, TightenStatus, Tightened};
 
@@ -97,7 +106,9 @@ pub struct LoopOptions {
     pub normal_variations: usize,
     /// Tilt of those extra normals, radians. Default 0.2 (about 11°).
     pub variation_angle: f64,
-    /// Loops longer than this × the bounding-box diagonal are dropped. Default 1.5.
+    /// Loops longer than this × the bounding-box diagonal are dropped. Default π: a
+    /// great circle of the ball whose diameter is the diagonal. (1.5 dropped the tunnel
+    /// of a thin ring around a wide hole: the bent ring's is 1.8 diagonals long.)
     pub max_length: f64,
     /// Two loops whose centres are closer than this × the diagonal ... Default 0.01.
     pub merge_distance: f64,
@@ -123,6 +134,34 @@ pub struct LoopOptions {
     /// Spacing of those planes, × the bounding-box diagonal. Default 0.005 (so up to
     /// 4 % of the diagonal each way).
     pub slide_step: f64,
+    /// When the saddle's membrane gives the initial loop. Default
+    /// [`MembraneUse::WherePlanesFail`].
+    pub membranes: MembraneUse,
+    /// How membranes are built.
+    pub membrane: MembraneOptions,
+}
+
+/// When the saddle's membrane (module [`membrane`]) gives the initial loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MembraneUse {
+    /// Never: planes only (the paper).
+    Never,
+    /// Where the plane through the saddle has no curve around it; parallel planes are
+    /// tried after the membrane.
+    WherePlanesFail,
+    /// Always, instead of planes (to compare the two constructions).
+    Always,
+}
+
+/// Which construction gave a loop's initial curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Initial {
+    /// A plane cut (through the saddle, or parallel to it: see `plane_offset`).
+    Plane,
+    /// The boundary of the saddle's membrane.
+    Membrane,
 }
 
 impl Default for LoopOptions {
@@ -131,7 +170,7 @@ impl Default for LoopOptions {
             tighten: TightenOptions::default(),
             normal_variations: 0,
             variation_angle: 0.2,
-            max_length: 1.5,
+            max_length: std::f64::consts::PI,
             merge_distance: 0.01,
             merge_length: 0.02,
             homology_selection: true,
@@ -139,6 +178,8 @@ impl Default for LoopOptions {
             offset_step: 0.00125,
             slide_steps: 8,
             slide_step: 0.005,
+            membranes: MembraneUse::WherePlanesFail,
+            membrane: MembraneOptions::default(),
         }
     }
 }
@@ -154,8 +195,10 @@ pub struct NeckLoop {
     pub surface_points: Vec<SurfacePoint>,
     /// Length of the tightened loop.
     pub length: f64,
-    /// Length of the plane-cut loop it started from.
+    /// Length of the initial loop it started from.
     pub initial_length: f64,
+    /// Which construction gave the initial loop.
+    pub initial: Initial,
     /// Signed distance along the cutting normal from the saddle to the plane that gave
     /// that loop: 0 unless the plane through the saddle had no curve around it, or a
     /// parallel plane gave a shorter loop of a cycle's class ([`LoopOptions::slide_steps`]).
@@ -256,6 +299,17 @@ pub enum DropReason {
         rounds: usize,
         /// Length when it was stopped.
         length: f64,
+    },
+    /// No plane had a curve around the saddle, and its membrane gave no loop either.
+    NoMembraneLoop {
+        /// What failed in the membrane.
+        failure: MembraneFailure,
+        /// Closed curves the plane through the saddle had.
+        closed_curves: usize,
+        /// Open curves.
+        open_curves: usize,
+        /// Parallel planes also tried, on each side.
+        offsets_tried: usize,
     },
     /// The cut curve did not form a strip of an oriented manifold surface.
     InvalidStrip,
@@ -379,6 +433,8 @@ pub fn find_loops_with_progress(
     let topology = Topology::new(surface);
     let geometry = SurfaceGeometry::new(surface, &topology);
     let basis = HomologyBasis::new(surface, &topology);
+    // Closest points for membranes, built when the first seed needs one.
+    let distance = OnceLock::new();
     let preparation = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
@@ -386,8 +442,10 @@ pub fn find_loops_with_progress(
     let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
         .par_iter()
         .map(|seed| {
-            let outcome = loop_from_seed(surface, &topology, &geometry, seed, options)
-                .map(|(t, offset)| candidate(surface, &topology, &basis, t, offset));
+            let outcome = loop_from_seed(surface, &topology, &geometry, &distance, seed, options)
+                .map(|(t, offset, initial)| {
+                    candidate(surface, &topology, &basis, t, offset, initial)
+                });
             progress.advance(1);
             outcome
         })
@@ -487,6 +545,8 @@ struct Candidate {
     tightened: Tightened,
     /// The cutting plane's offset from the saddle.
     offset: f64,
+    /// Plane or membrane.
+    initial: Initial,
     /// Its Z2 homology class.
     class: Vec<u64>,
     /// When it separates the surface: the areas of its sides.
@@ -581,6 +641,7 @@ fn candidate(
     basis: &HomologyBasis,
     tightened: Tightened,
     offset: f64,
+    initial: Initial,
 ) -> Candidate {
     let crossed = classes::crossings(surface, topology, &tightened.surface_points);
     let class = basis.class_of_crossings(crossed.iter().copied());
@@ -592,6 +653,7 @@ fn candidate(
     Candidate {
         tightened,
         offset,
+        initial,
         class,
         areas,
     }
@@ -612,20 +674,48 @@ fn cutting_normals(seed: &Seed, options: &LoopOptions) -> ([f64; 3], Vec<[f64; 3
     (n, normals)
 }
 
-/// Cut, choose, tighten; also the offset of the plane that gave the loop.
+/// Cut, choose, tighten; also the offset of the plane that gave the loop, and whether a
+/// plane or the membrane gave it. Order: the plane through the saddle, then (where
+/// membranes are used) the membrane, then the parallel planes nearest first.
 fn loop_from_seed(
     surface: &SurfaceMesh,
     topology: &Topology,
     geometry: &SurfaceGeometry,
+    distance: &OnceLock<SurfaceDistance>,
     seed: &Seed,
     options: &LoopOptions,
-) -> std::result::Result<(Tightened, f64), DropReason> {
+) -> std::result::Result<(Tightened, f64, Initial), DropReason> {
     let (n, normals) = cutting_normals(seed, options);
+    let membrane = || {
+        membrane_loop(
+            surface,
+            topology,
+            distance.get_or_init(|| SurfaceDistance::new(surface)),
+            seed.position,
+            n,
+            &options.membrane,
+        )
+        .map(|m| {
+            let t = tighten(geometry, &m.crossings, &m.faces, &options.tighten);
+            tightened(t).map(|t| (t, 0.0, Initial::Membrane))
+        })
+    };
+    if options.membranes == MembraneUse::Always {
+        return membrane().unwrap_or_else(|failure| {
+            Err(DropReason::NoMembraneLoop {
+                failure,
+                closed_curves: 0,
+                open_curves: 0,
+                offsets_tried: 0,
+            })
+        });
+    }
     // The plane through the saddle first, then parallel ones nearest first.
     let step = options.offset_step * surface.bbox_diagonal();
     let offsets = std::iter::once(0.0)
         .chain((1..=options.plane_offsets).flat_map(|j| [j as f64 * step, -(j as f64) * step]));
     let (mut closed, mut open) = (0, 0);
+    let mut failure = None;
     for offset in offsets {
         let point = add(seed.position, scale(n, offset));
         let best = around_point(surface, topology, &normals, point);
@@ -634,15 +724,29 @@ fn loop_from_seed(
         }
         if let Some((_, curve)) = best.0 {
             let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
-            return tightened(t).map(|t| (t, offset));
+            return tightened(t).map(|t| (t, offset, Initial::Plane));
+        }
+        if offset == 0.0 && options.membranes == MembraneUse::WherePlanesFail {
+            match membrane() {
+                Ok(result) => return result,
+                Err(f) => failure = Some(f),
+            }
         }
     }
-    Err(DropReason::NoLoopAroundSaddle {
-        closed_curves: closed,
-        open_curves: open,
-        offsets_tried: options.plane_offsets,
-        offset_step: step,
-    })
+    match failure {
+        Some(failure) => Err(DropReason::NoMembraneLoop {
+            failure,
+            closed_curves: closed,
+            open_curves: open,
+            offsets_tried: options.plane_offsets,
+        }),
+        None => Err(DropReason::NoLoopAroundSaddle {
+            closed_curves: closed,
+            open_curves: open,
+            offsets_tried: options.plane_offsets,
+            offset_step: step,
+        }),
+    }
 }
 
 /// The shortest loop of `c`'s class over the parallel planes up to
@@ -671,7 +775,7 @@ fn narrowest(
             let Ok(t) = tightened(t) else { continue };
             // Shorter beyond round-off: the same geodesic reached again does not move it.
             if t.length < best.tightened.length * (1.0 - 1e-6) {
-                let other = candidate(surface, topology, basis, t, offset);
+                let other = candidate(surface, topology, basis, t, offset, Initial::Plane);
                 if other.class == best.class {
                     best = other;
                 }
@@ -754,6 +858,7 @@ fn select(
         let Candidate {
             tightened: t,
             offset,
+            initial,
             class,
             areas,
         } = c;
@@ -811,6 +916,7 @@ fn select(
             },
             length: t.length,
             initial_length: t.initial_length,
+            initial,
             plane_offset: offset,
             points: t.points,
             surface_points: t.surface_points,

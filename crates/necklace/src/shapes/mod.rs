@@ -55,6 +55,9 @@ pub enum ShapeKind {
     /// Ball-and-stick truncated icosahedron: balls on its 60 vertices, sticks on its
     /// 90 edges; genus 31.
     Buckyball,
+    /// A ring whose core curve rises and falls like a saddle, (R cos t, R sin t,
+    /// bend · cos 2t): genus 1, and no plane through the hole's saddle closes around it.
+    BentRing,
 }
 
 /// A named numeric parameter of a shape, with its default and allowed range.
@@ -235,6 +238,24 @@ const BUCKYBALL: &[ParamSpec] = &[
     real("blend", 0.03, 0.0, 1e6, BLEND_DOC),
     whole("res", 120.0, 4.0, 1000.0, RES_DOC),
 ];
+const BENT_RING: &[ParamSpec] = &[
+    real(
+        "R",
+        1.0,
+        1e-6,
+        1e6,
+        "radius of the core curve's projection on the xy-plane",
+    ),
+    real("r", 0.15, 1e-6, 1e6, "tube radius (< R / 2)"),
+    real(
+        "bend",
+        0.45,
+        -1e6,
+        1e6,
+        "height of the core curve's rise and fall: z = bend · cos 2t",
+    ),
+    whole("res", 72.0, 4.0, 1000.0, RES_DOC),
+];
 /// Angle of the first satellite from +x, in radians. Off the lattice axes so that no
 /// neck cylinder runs along a lattice direction, where marching tetrahedra's projected
 /// vertices can line up on one ruling and fold a sliver over its neighbour.
@@ -331,7 +352,7 @@ const PRETZEL: &[ParamSpec] = &[
 
 impl ShapeKind {
     /// Every shape, in documentation order.
-    pub const ALL: [ShapeKind; 12] = [
+    pub const ALL: [ShapeKind; 13] = [
         ShapeKind::Sphere,
         ShapeKind::Ellipsoid,
         ShapeKind::Capsule,
@@ -344,6 +365,7 @@ impl ShapeKind {
         ShapeKind::Pretzel,
         ShapeKind::Satellites,
         ShapeKind::Buckyball,
+        ShapeKind::BentRing,
     ];
 
     /// The name used on the command line.
@@ -361,6 +383,7 @@ impl ShapeKind {
             ShapeKind::Pretzel => "pretzel",
             ShapeKind::Satellites => "satellites",
             ShapeKind::Buckyball => "buckyball",
+            ShapeKind::BentRing => "bent-ring",
         }
     }
 
@@ -393,6 +416,7 @@ impl ShapeKind {
             ShapeKind::Pretzel => PRETZEL,
             ShapeKind::Satellites => SATELLITES,
             ShapeKind::Buckyball => BUCKYBALL,
+            ShapeKind::BentRing => BENT_RING,
         }
     }
 
@@ -442,6 +466,11 @@ impl ShapeKind {
                 "balls on the 60 vertices and sticks on the 90 edges of a truncated \
                  icosahedron; genus 31; 90 handles (one per stick, length 2π stick) and 32 \
                  tunnels (one per pentagon or hexagon window)"
+            }
+            ShapeKind::BentRing => {
+                "tube of radius r around the curve (R cos t, R sin t, bend cos 2t); genus 1; one \
+                 handle (a meridian, length 2πr) and one tunnel around the hole, which no plane \
+                 through the hole's centre cuts as a closed curve once |bend| > r"
             }
         }
     }
@@ -608,6 +637,11 @@ impl Shape {
                     0.5 * p("edge")
                 ))
             }
+            ShapeKind::BentRing if p("r") >= 0.5 * p("R") => fail(format!(
+                "bent-ring: the tube radius r = {} must be below R / 2 = {}",
+                p("r"),
+                0.5 * p("R")
+            )),
             ShapeKind::Torus | ShapeKind::Eight | ShapeKind::Pretzel if p("r") >= p("R") => {
                 fail(format!("tube radius r = {} must be < R = {}", p("r"), p("R")))
             }
@@ -654,7 +688,7 @@ impl Shape {
             | ShapeKind::Chain
             | ShapeKind::Satellites => 0,
             ShapeKind::Buckyball => 31,
-            ShapeKind::Torus | ShapeKind::VaryingTorus => 1,
+            ShapeKind::Torus | ShapeKind::VaryingTorus | ShapeKind::BentRing => 1,
             ShapeKind::Eight => 2,
             ShapeKind::Pretzel => self.param("g") as usize,
         }
@@ -785,6 +819,11 @@ impl Shape {
                 let r = self.param("r");
                 sdf::torus(p, o, self.param("R"), |_| r)
             }
+            ShapeKind::BentRing => {
+                let (big_r, bend) = (self.param("R"), self.param("bend"));
+                let core = |t: f64| [big_r * t.cos(), big_r * t.sin(), bend * (2.0 * t).cos()];
+                sdf::distance_to_closed_curve(p, core) - self.param("r")
+            }
             ShapeKind::VaryingTorus => {
                 let (r0, a) = (self.param("r0"), self.param("a"));
                 sdf::torus(p, o, self.param("R"), |theta| r0 * (1.0 + a * theta.cos()))
@@ -848,6 +887,10 @@ impl Shape {
             ShapeKind::VaryingTorus => {
                 let (big_r, r) = (self.param("R"), self.param("r0") * (1.0 + self.param("a")));
                 [big_r + r, big_r + r, r]
+            }
+            ShapeKind::BentRing => {
+                let (big_r, r) = (self.param("R"), self.param("r"));
+                [big_r + r, big_r + r, self.param("bend").abs() + r]
             }
             ShapeKind::Dumbbell | ShapeKind::Chain => {
                 let radius = self.param("radius");
@@ -934,6 +977,18 @@ impl Shape {
                     ),
                 ]
             }
+            ShapeKind::BentRing => vec![
+                handle(
+                    Some(2.0 * PI * self.param("r")),
+                    None,
+                    "a meridian circle of the uniform tube: position degenerate",
+                ),
+                tunnel(
+                    None,
+                    Some([0.0; 3]),
+                    "around the hole, rising and falling with the ring; no closed form",
+                ),
+            ],
             ShapeKind::VaryingTorus => {
                 let (big_r, r0, a) = (self.param("R"), self.param("r0"), self.param("a"));
                 vec![

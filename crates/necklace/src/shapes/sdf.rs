@@ -58,6 +58,37 @@ pub(crate) fn round_cone(p: [f64; 3], a: [f64; 3], b: [f64; 3], ra: f64, rb: f64
     }
 }
 
+/// Distance from `p` to the closed curve `core(t)`, t in [0, 2π): the nearest of 64
+/// samples, then golden-section search on the two sample intervals beside it. Exact for
+/// a smooth curve whose samples are dense compared with its curvature radius.
+pub(crate) fn distance_to_closed_curve(p: [f64; 3], core: impl Fn(f64) -> [f64; 3]) -> f64 {
+    const SAMPLES: usize = 64;
+    let step = std::f64::consts::TAU / SAMPLES as f64;
+    let d = |t: f64| norm(sub(p, core(t)));
+    let best = (0..SAMPLES)
+        .map(|i| i as f64 * step)
+        .min_by(|a, b| d(*a).total_cmp(&d(*b)))
+        .expect("samples");
+    let (mut a, mut b) = (best - step, best + step);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut x1, mut x2) = (b - g * (b - a), a + g * (b - a));
+    let (mut f1, mut f2) = (d(x1), d(x2));
+    for _ in 0..40 {
+        if f1 < f2 {
+            b = x2;
+            (x2, f2) = (x1, f1);
+            x1 = b - g * (b - a);
+            f1 = d(x1);
+        } else {
+            a = x1;
+            (x1, f1) = (x2, f2);
+            x2 = a + g * (b - a);
+            f2 = d(x2);
+        }
+    }
+    f1.min(f2).min(d(best))
+}
+
 /// Polynomial smooth minimum with blend width `k` (plain `min` for `k = 0`). It differs
 /// from `min(a, b)` only where `|a − b| < k`, by at most `k/4`.
 pub(crate) fn smooth_union(a: f64, b: f64, k: f64) -> f64 {
@@ -94,5 +125,10 @@ mod tests {
             assert!((round_cone(q, a, b, 0.3, 0.3) - capsule(q, a, b, 0.3)).abs() < 1e-12);
         }
         assert!(smooth_union(0.0, 0.0, 0.1) < 0.0);
+        // A circle of radius 2: the distance from its axis, and from a point beside it.
+        let circle = |t: f64| [2.0 * t.cos(), 2.0 * t.sin(), 0.0];
+        assert!((distance_to_closed_curve([0.0, 0.0, 1.5], circle) - 2.5).abs() < 1e-12);
+        let q = [3.0 * 0.7f64.cos(), 3.0 * 0.7f64.sin(), 1.0];
+        assert!((distance_to_closed_curve(q, circle) - 2f64.sqrt()).abs() < 1e-9);
     }
 }
