@@ -268,6 +268,7 @@ fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
     for file in [
         "loops.obj",
         "loops.ply",
+        "membranes.ply",
         "loops.json",
         "critical.ply",
         "view.png",

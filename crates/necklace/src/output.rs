@@ -8,6 +8,8 @@
 //!   kind and index (Blender, MeshLab, any OBJ reader);
 //! - `loops.ply`: the same loops as PLY vertices and edges, each carrying `loop` (its
 //!   index) and its kind's colour (MeshLab, ParaView, CloudCompare);
+//! - `membranes.ply`: a disk each loop bounds (see `NeckLoop::membrane`), one component
+//!   per loop, each face carrying `loop` (the loop's index);
 //! - `loops.json`: the whole report with a `version` field (schema: `docs/output.md`);
 //! - `critical.ply`: every critical point at the last smoothing step of each side, with
 //!   `type`, `selected`, `persistence`, `side` and colours (see
@@ -107,6 +109,24 @@ pub fn loop_curves(report: &NeckReport) -> Vec<LoopCurve> {
         .collect()
 }
 
+/// The membranes of all loops as one mesh, one component per loop, and the index of
+/// each face's loop.
+pub fn membranes(report: &NeckReport) -> (SurfaceMesh, Vec<i32>) {
+    let mut mesh = SurfaceMesh {
+        positions: Vec::new(),
+        triangles: Vec::new(),
+    };
+    let mut labels = Vec::new();
+    for (i, l) in report.loops.iter().enumerate() {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend_from_slice(&l.membrane.positions);
+        mesh.triangles
+            .extend(l.membrane.triangles.iter().map(|t| t.map(|v| v + base)));
+        labels.extend(std::iter::repeat_n(i as i32, l.membrane.triangles.len()));
+    }
+    (mesh, labels)
+}
+
 /// The picture's scene: the surface, each loop in its kind's colour labelled by its
 /// index, `saddles` as dots, and a legend of the kinds present.
 pub fn loop_scene<'a>(
@@ -176,6 +196,13 @@ pub fn write_run(
     let colors: Vec<[u8; 3]> = curves.iter().map(|c| kind_color(c.kind)).collect();
     io::write_polylines_ply(&path, &lines, &colors)?;
     written.push(path);
+
+    if !report.loops.is_empty() {
+        let path = dir.join("membranes.ply");
+        let (mesh, labels) = membranes(report);
+        io::write_labelled_mesh_ply(&path, &mesh, "loop", &labels)?;
+        written.push(path);
+    }
 
     let path = dir.join("loops.json");
     let value = report_json(report, input)?;

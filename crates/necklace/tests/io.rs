@@ -1074,3 +1074,32 @@ fn every_byte_corruption_returns_without_panic() {
         }
     }
 }
+
+#[test]
+fn a_labelled_mesh_reads_back_and_a_label_count_mismatch_is_an_error() {
+    let mesh = SurfaceMesh {
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.5],
+        ],
+        triangles: vec![[0, 1, 2], [1, 3, 2]],
+    };
+    let path = temp_path("labelled.ply");
+    necklace::io::write_labelled_mesh_ply(&path, &mesh, "loop", &[0, 7]).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let header = String::from_utf8_lossy(&bytes[..300]);
+    assert!(header.contains("property int loop"), "{header}");
+    // The labels follow each face's indices: 1 + 3·4 + 4 bytes per face.
+    let faces = &bytes[bytes.len() - 2 * 17..];
+    assert_eq!(i32::from_le_bytes(faces[30..34].try_into().unwrap()), 7);
+    let back = read_mesh(&path).unwrap();
+    assert_eq!(back, mesh);
+    let e = necklace::io::write_labelled_mesh_ply(&path, &mesh, "loop", &[0]).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::InvalidArgument);
+    let e = necklace::io::write_labelled_mesh_ply(temp_path("x.obj"), &mesh, "loop", &[0, 1])
+        .unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::UnknownFormat);
+    std::fs::remove_file(&path).unwrap();
+}

@@ -547,6 +547,47 @@ fn bent_ring_tunnel(bend: f64) {
     for s in &r.sides {
         assert!(s.homology.ok, "{:?}", s.homology);
     }
+    check_membranes(&shape.mesh().unwrap(), &r, &format!("bent-{bend}"));
+}
+
+/// `membranes.ply` of a run reads back as one disk per loop (χ = 1, oriented) whose
+/// boundary lies on the surface.
+fn check_membranes(surface: &SurfaceMesh, report: &NeckReport, name: &str) {
+    let dir =
+        std::env::temp_dir().join(format!("necklace-membranes-{name}-{}", std::process::id()));
+    let files = necklace::output::OutputOptions {
+        picture: None,
+        volume: false,
+    };
+    necklace::output::write_run(&dir, surface, report, &files, None).unwrap();
+    let path = dir.join("membranes.ply");
+    let bytes = std::fs::read(&path).unwrap();
+    let header = String::from_utf8_lossy(&bytes[..bytes.len().min(400)]).to_string();
+    assert!(header.contains("property int loop"), "{header}");
+    let mesh = necklace::io::read_mesh(&path).unwrap();
+    let topology = Topology::new(&mesh);
+    let (component, count) = topology.components(&mesh);
+    assert_eq!(count, report.loops.len());
+    let mut chi = vec![0i64; count];
+    for c in component.iter().flatten() {
+        chi[*c as usize] += 1;
+    }
+    for [a, _] in topology.edges() {
+        chi[component[*a as usize].unwrap() as usize] -= 1;
+    }
+    for t in &mesh.triangles {
+        chi[component[t[0] as usize].unwrap() as usize] += 1;
+    }
+    assert!(chi.iter().all(|&x| x == 1), "{chi:?}");
+    assert!(topology.inconsistently_oriented_edges(&mesh).is_empty());
+    let distance = necklace::distance::SurfaceDistance::new(surface);
+    for e in topology.boundary_edges() {
+        for v in topology.edges()[e] {
+            let d = distance.distance(mesh.positions[v as usize]);
+            assert!(d < 1e-9 * surface.bbox_diagonal(), "{d}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

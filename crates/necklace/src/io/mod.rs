@@ -245,6 +245,35 @@ pub fn write_polylines_ply(
         .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
 }
 
+/// Write a triangle mesh as binary PLY whose faces carry the `int` property `name`
+/// (`labels[f]` for face f), e.g. the index of the loop a membrane belongs to.
+pub fn write_labelled_mesh_ply(
+    path: impl AsRef<Path>,
+    mesh: &SurfaceMesh,
+    name: &str,
+    labels: &[i32],
+) -> Result<()> {
+    let path = path.as_ref();
+    if Format::from_extension(path) != Some(Format::Ply) {
+        return Err(Error::new(
+            ErrorKind::UnknownFormat,
+            "a labelled mesh is written as PLY: use a .ply file name",
+        )
+        .in_file(path));
+    }
+    if labels.len() != mesh.triangles.len() {
+        return Err(Error::invalid_argument(format!(
+            "{} labels for {} triangles",
+            labels.len(),
+            mesh.triangles.len()
+        )));
+    }
+    let mut out = Vec::new();
+    ply::write_labelled(mesh, name, labels, &mut out);
+    std::fs::write(path, out)
+        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+}
+
 /// The OBJ text of [`write_polylines`].
 pub fn polylines_obj(polylines: &[Vec<[f64; 3]>], names: &[String]) -> String {
     use std::fmt::Write as _;

@@ -677,6 +677,38 @@ pub(crate) fn write(mesh: &SurfaceMesh, out: &mut Vec<u8>) {
     }
 }
 
+/// Binary PLY mesh whose faces carry one `int` property `name` (`labels[f]` for face f).
+pub(crate) fn write_labelled(mesh: &SurfaceMesh, name: &str, labels: &[i32], out: &mut Vec<u8>) {
+    let header = format!(
+        "ply\n\
+         format binary_little_endian 1.0\n\
+         comment written by necklace\n\
+         element vertex {}\n\
+         property double x\n\
+         property double y\n\
+         property double z\n\
+         element face {}\n\
+         property list uchar uint vertex_indices\n\
+         property int {name}\n\
+         end_header\n",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    );
+    out.extend_from_slice(header.as_bytes());
+    for position in &mesh.positions {
+        for c in position {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for (triangle, label) in mesh.triangles.iter().zip(labels) {
+        out.push(3);
+        for i in triangle {
+            out.extend_from_slice(&i.to_le_bytes());
+        }
+        out.extend_from_slice(&label.to_le_bytes());
+    }
+}
+
 /// Binary PLY point cloud: `x y z` (double), one double property per named scalar
 /// field, and `red green blue` (uchar) when colours are given.
 pub(crate) fn write_points(points: &PointCloud, out: &mut Vec<u8>) {

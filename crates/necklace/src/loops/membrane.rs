@@ -154,6 +154,80 @@ pub fn membrane_loop(
     Err(failure)
 }
 
+/// A disk bounded by the closed polyline `boundary` (a tightened loop): the fan from
+/// `saddle` to the closed polygon `sources` and the strip from it to the boundary, the two
+/// polygons matched by arc length from the boundary point nearest `sources[0]` and in the
+/// same sense around the axis (`saddle`, `normal`); without sources, the cone from the
+/// saddle. Vertices: the saddle, the sources, the boundary; consistently oriented, and
+/// χ = 1 by construction.
+pub fn spanning_disk(
+    saddle: [f64; 3],
+    normal: [f64; 3],
+    sources: &[[f64; 3]],
+    boundary: &[[f64; 3]],
+) -> SurfaceMesh {
+    let mut positions = vec![saddle];
+    let mut triangles = Vec::new();
+    let fan = |ring: std::ops::Range<usize>, triangles: &mut Vec<[u32; 3]>| {
+        let n = ring.len();
+        for k in 0..n {
+            let (a, b) = (ring.start + k, ring.start + (k + 1) % n);
+            triangles.push([0, a as u32, b as u32]);
+        }
+    };
+    if sources.len() < 3 {
+        positions.extend_from_slice(boundary);
+        fan(1..positions.len(), &mut triangles);
+        return SurfaceMesh {
+            positions,
+            triangles,
+        };
+    }
+    let axis = Axis::new(saddle, scale(normal, 1.0 / norm(normal)));
+    let mut boundary = boundary.to_vec();
+    if axis.winding(sources) * axis.winding(&boundary) < 0 {
+        boundary.reverse();
+    }
+    let start = (0..boundary.len())
+        .min_by(|&a, &b| {
+            let d = |k: usize| norm(sub(boundary[k], sources[0]));
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap_or(0);
+    boundary.rotate_left(start);
+    let (m, k) = (sources.len(), boundary.len());
+    positions.extend_from_slice(sources);
+    positions.extend_from_slice(&boundary);
+    fan(1..1 + m, &mut triangles);
+    // Strip: walk both polygons by their arc-length fractions.
+    let fractions = |poly: &[[f64; 3]]| {
+        let n = poly.len();
+        let mut acc = vec![0.0; n + 1];
+        for i in 0..n {
+            acc[i + 1] = acc[i] + norm(sub(poly[(i + 1) % n], poly[i]));
+        }
+        let total = acc[n].max(f64::MIN_POSITIVE);
+        acc.into_iter().map(|x| x / total).collect::<Vec<f64>>()
+    };
+    let (fs, fb) = (fractions(sources), fractions(&boundary));
+    let s = |i: usize| (1 + i % m) as u32;
+    let b = |j: usize| (1 + m + j % k) as u32;
+    let (mut i, mut j) = (0, 0);
+    while i < m || j < k {
+        if j == k || (i < m && fs[i + 1] <= fb[j + 1]) {
+            triangles.push([s(i + 1), s(i), b(j)]);
+            i += 1;
+        } else {
+            triangles.push([s(i), b(j), b(j + 1)]);
+            j += 1;
+        }
+    }
+    SurfaceMesh {
+        positions,
+        triangles,
+    }
+}
+
 /// The line through the saddle along the cutting normal, with a basis of its normal
 /// plane.
 struct Axis {

@@ -199,6 +199,11 @@ pub struct NeckLoop {
     pub initial_length: f64,
     /// Which construction gave the initial loop.
     pub initial: Initial,
+    /// A disk the loop bounds (not in the JSON; written as `membranes.ply`): for a
+    /// membrane-built loop, the fan from the saddle to the membrane's sources and the
+    /// strip from them to the loop; for a plane-built one, the cone from the saddle.
+    #[serde(skip)]
+    pub membrane: SurfaceMesh,
     /// Signed distance along the cutting normal from the saddle to the plane that gave
     /// that loop: 0 unless the plane through the saddle had no curve around it, or a
     /// parallel plane gave a shorter loop of a cycle's class ([`LoopOptions::slide_steps`]).
@@ -443,8 +448,11 @@ pub fn find_loops_with_progress(
         .par_iter()
         .map(|seed| {
             let outcome = loop_from_seed(surface, &topology, &geometry, &distance, seed, options)
-                .map(|(t, offset, initial)| {
-                    candidate(surface, &topology, &basis, t, offset, initial)
+                .map(|s| {
+                    let mut c =
+                        candidate(surface, &topology, &basis, s.tightened, s.offset, s.initial);
+                    c.sources = s.sources;
+                    c
                 });
             progress.advance(1);
             outcome
@@ -540,6 +548,17 @@ fn check_inputs(surface: &SurfaceMesh, seeds: &[Seed], options: &LoopOptions) ->
     Ok(())
 }
 
+/// A tightened loop and how it started.
+struct Start {
+    tightened: Tightened,
+    /// The cutting plane's offset from the saddle.
+    offset: f64,
+    /// Plane or membrane.
+    initial: Initial,
+    /// A membrane's sources; empty for a plane.
+    sources: Vec<[f64; 3]>,
+}
+
 /// A tightened loop before selection.
 struct Candidate {
     tightened: Tightened,
@@ -547,6 +566,8 @@ struct Candidate {
     offset: f64,
     /// Plane or membrane.
     initial: Initial,
+    /// A membrane's sources (see [`membrane::MembraneLoop::sources`]); empty for a plane.
+    sources: Vec<[f64; 3]>,
     /// Its Z2 homology class.
     class: Vec<u64>,
     /// When it separates the surface: the areas of its sides.
@@ -569,10 +590,22 @@ fn one_per_neck(
         .into_iter()
         .partition(|(i, _)| seeds[*i].role == Some(Role::CycleClosing));
     // Cycles that are not necks by shape claim the classes first: a neck by shape is
-    // kept anyway, so it should not take the class another cycle needs.
+    // kept anyway, so it should not take the class another cycle needs. Except cycles
+    // whose saddle lives less than a quarter as long as the longest-lived one: they
+    // claim last, so that they keep a loop only where no longer-lived cycle spans their
+    // class. (In the wire sphere's hollow a saddle living 3 of 32 levels took a class,
+    // with a loop 5.5 long round the hollow, before the two windows that are also necks
+    // by bulge, which are then kept anyway: 97 tunnel loops for 96 windows.)
+    let longest = cycles
+        .iter()
+        .map(|(i, _)| seeds[*i].persistence)
+        .max()
+        .unwrap_or(0);
+    let short_lived = |i: usize| 4 * seeds[i].persistence < longest;
     cycles.sort_by(|(i, a), (j, b)| {
-        (seeds[*i].bulge.is_some())
-            .cmp(&seeds[*j].bulge.is_some())
+        short_lived(*i)
+            .cmp(&short_lived(*j))
+            .then((seeds[*i].bulge.is_some()).cmp(&seeds[*j].bulge.is_some()))
             .then(a.tightened.length.total_cmp(&b.tightened.length))
             .then(i.cmp(j))
     });
@@ -654,6 +687,7 @@ fn candidate(
         tightened,
         offset,
         initial,
+        sources: Vec::new(),
         class,
         areas,
     }
@@ -684,7 +718,7 @@ fn loop_from_seed(
     distance: &OnceLock<SurfaceDistance>,
     seed: &Seed,
     options: &LoopOptions,
-) -> std::result::Result<(Tightened, f64, Initial), DropReason> {
+) -> std::result::Result<Start, DropReason> {
     let (n, normals) = cutting_normals(seed, options);
     let membrane = || {
         membrane_loop(
@@ -697,7 +731,12 @@ fn loop_from_seed(
         )
         .map(|m| {
             let t = tighten(geometry, &m.crossings, &m.faces, &options.tighten);
-            tightened(t).map(|t| (t, 0.0, Initial::Membrane))
+            tightened(t).map(|t| Start {
+                tightened: t,
+                offset: 0.0,
+                initial: Initial::Membrane,
+                sources: m.sources,
+            })
         })
     };
     if options.membranes == MembraneUse::Always {
@@ -724,7 +763,12 @@ fn loop_from_seed(
         }
         if let Some((_, curve)) = best.0 {
             let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
-            return tightened(t).map(|t| (t, offset, Initial::Plane));
+            return tightened(t).map(|t| Start {
+                tightened: t,
+                offset,
+                initial: Initial::Plane,
+                sources: Vec::new(),
+            });
         }
         if offset == 0.0 && options.membranes == MembraneUse::WherePlanesFail {
             match membrane() {
@@ -859,9 +903,12 @@ fn select(
             tightened: t,
             offset,
             initial,
+            sources,
             class,
             areas,
         } = c;
+        let membrane =
+            membrane::spanning_disk(seeds[i].position, seeds[i].normal, &sources, &t.points);
         let center = centroid(&t.points);
         let duplicate_of = loops.iter().position(|l| {
             norm(sub(l.center, center)) <= options.merge_distance * diagonal
@@ -917,6 +964,7 @@ fn select(
             length: t.length,
             initial_length: t.initial_length,
             initial,
+            membrane,
             plane_offset: offset,
             points: t.points,
             surface_points: t.surface_points,
