@@ -648,37 +648,16 @@ impl Source for BinarySource<'_> {
 
 /// Write a mesh as binary little-endian PLY.
 pub(crate) fn write(mesh: &SurfaceMesh, out: &mut Vec<u8>) {
-    let header = format!(
-        "ply\n\
-         format binary_little_endian 1.0\n\
-         comment written by necklace\n\
-         element vertex {}\n\
-         property double x\n\
-         property double y\n\
-         property double z\n\
-         element face {}\n\
-         property list uchar uint vertex_indices\n\
-         end_header\n",
-        mesh.positions.len(),
-        mesh.triangles.len()
-    );
-    out.reserve(header.len() + mesh.positions.len() * 24 + mesh.triangles.len() * 13);
-    out.extend_from_slice(header.as_bytes());
-    for position in &mesh.positions {
-        for c in position {
-            out.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    for triangle in &mesh.triangles {
-        out.push(3);
-        for i in triangle {
-            out.extend_from_slice(&i.to_le_bytes());
-        }
-    }
+    write_with_labels(mesh, None, out);
 }
 
 /// Binary PLY mesh whose faces carry one `int` property `name` (`labels[f]` for face f).
 pub(crate) fn write_labelled(mesh: &SurfaceMesh, name: &str, labels: &[i32], out: &mut Vec<u8>) {
+    write_with_labels(mesh, Some((name, labels)), out);
+}
+
+fn write_with_labels(mesh: &SurfaceMesh, labels: Option<(&str, &[i32])>, out: &mut Vec<u8>) {
+    let label_property = labels.map_or(String::new(), |(name, _)| format!("property int {name}\n"));
     let header = format!(
         "ply\n\
          format binary_little_endian 1.0\n\
@@ -689,23 +668,26 @@ pub(crate) fn write_labelled(mesh: &SurfaceMesh, name: &str, labels: &[i32], out
          property double z\n\
          element face {}\n\
          property list uchar uint vertex_indices\n\
-         property int {name}\n\
+         {label_property}\
          end_header\n",
         mesh.positions.len(),
         mesh.triangles.len()
     );
+    out.reserve(header.len() + mesh.positions.len() * 24 + mesh.triangles.len() * 17);
     out.extend_from_slice(header.as_bytes());
     for position in &mesh.positions {
         for c in position {
             out.extend_from_slice(&c.to_le_bytes());
         }
     }
-    for (triangle, label) in mesh.triangles.iter().zip(labels) {
+    for (f, triangle) in mesh.triangles.iter().enumerate() {
         out.push(3);
         for i in triangle {
             out.extend_from_slice(&i.to_le_bytes());
         }
-        out.extend_from_slice(&label.to_le_bytes());
+        if let Some((_, labels)) = labels {
+            out.extend_from_slice(&labels[f].to_le_bytes());
+        }
     }
 }
 
