@@ -590,32 +590,45 @@ fn one_per_neck(
         .into_iter()
         .partition(|(i, _)| seeds[*i].role == Some(Role::CycleClosing));
     // Cycles that are not necks by shape claim the classes first: a neck by shape is
-    // kept anyway, so it should not take the class another cycle needs. Except cycles
-    // whose saddle lives less than a quarter as long as the longest-lived one: they
-    // claim last, so that they keep a loop only where no longer-lived cycle spans their
-    // class. (In the wire sphere's hollow a saddle living 3 of 32 levels took a class,
-    // with a loop 5.5 long round the hollow, before the two windows that are also necks
-    // by bulge, which are then kept anyway: 97 tunnel loops for 96 windows.)
+    // kept anyway, so it should not take the class another cycle needs.
+    cycles.sort_by(|(i, a), (j, b)| {
+        (seeds[*i].bulge.is_some())
+            .cmp(&seeds[*j].bulge.is_some())
+            .then(a.tightened.length.total_cmp(&b.tightened.length))
+            .then(i.cmp(j))
+    });
+    // But a cycle whose saddle lives less than a quarter as long as the longest-lived
+    // one claims a class only if those necks by shape do not span it either. (In the
+    // wire sphere's hollow a saddle living 3 of 32 levels took a class, with a loop 5.5
+    // long round the hollow, before the two windows that are also necks by bulge, which
+    // are kept anyway: 97 tunnel loops for 96 windows.)
     let longest = cycles
         .iter()
         .map(|(i, _)| seeds[*i].persistence)
         .max()
         .unwrap_or(0);
     let short_lived = |i: usize| 4 * seeds[i].persistence < longest;
-    cycles.sort_by(|(i, a), (j, b)| {
-        short_lived(*i)
-            .cmp(&short_lived(*j))
-            .then((seeds[*i].bulge.is_some()).cmp(&seeds[*j].bulge.is_some()))
-            .then(a.tightened.length.total_cmp(&b.tightened.length))
-            .then(i.cmp(j))
-    });
+    let by_shape: Vec<Vec<u64>> = cycles
+        .iter()
+        .filter(|(i, _)| seeds[*i].bulge.is_some())
+        .map(|(_, c)| c.class.clone())
+        .collect();
     let mut basis = Z2Basis::default();
     let mut kept: Vec<(usize, Vec<u64>)> = Vec::new();
     let mut necks = Vec::new();
     for (i, c) in cycles {
         let length = c.tightened.length;
+        let spanned_by_shape = || {
+            let mut both = basis.clone();
+            for class in &by_shape {
+                both.insert(class);
+            }
+            !both.insert(&c.class)
+        };
         let reason = if c.class.iter().all(|w| *w == 0) {
             Some(DropReason::NotEssential { length })
+        } else if short_lived(i) && seeds[i].bulge.is_none() && spanned_by_shape() {
+            Some(DropReason::SameCycle { of: None, length })
         } else if basis.insert(&c.class) {
             None
         } else {
