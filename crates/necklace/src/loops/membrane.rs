@@ -449,7 +449,10 @@ fn shared_edge(topology: &Topology, f: u32, g: u32) -> Option<u32> {
 }
 
 /// Shortest path of faces from `a` to `b` (both included) across manifold edges, by
-/// centroid distance; `None` when `b` is not reached within `max_settled` faces.
+/// centroid distance; `None` when `b` is not reached within `max_settled` faces. A*
+/// with the straight distance to `b`'s centroid, which never overestimates (and is
+/// consistent: a step's length bounds the change of the distance), so the path is a
+/// shortest one and only faces towards `b` are searched.
 fn dual_path(
     surface: &SurfaceMesh,
     topology: &Topology,
@@ -460,17 +463,16 @@ fn dual_path(
     if a == b {
         return Some(vec![a]);
     }
-    // Distances as ordered bits: non-negative floats order like their bit patterns.
+    let target = centroid(surface, b);
+    let estimate = |c: [f64; 3]| norm(sub(target, c));
+    // Non-negative floats order like their bit patterns. Per face: (distance from `a`,
+    // previous face).
     let mut best: HashMap<u32, (f64, u32)> = HashMap::new();
     let mut heap = BinaryHeap::new();
     best.insert(a, (0.0, a));
-    heap.push(Reverse((0f64.to_bits(), a)));
+    heap.push(Reverse((estimate(centroid(surface, a)).to_bits(), a)));
     let mut settled = 0;
-    while let Some(Reverse((bits, f))) = heap.pop() {
-        let df = f64::from_bits(bits);
-        if df > best[&f].0 {
-            continue;
-        }
+    while let Some(Reverse((_, f))) = heap.pop() {
         if f == b {
             let mut path = vec![b];
             let mut x = b;
@@ -485,12 +487,14 @@ fn dual_path(
         if settled > max_settled {
             return None;
         }
+        let df = best[&f].0;
         let cf = centroid(surface, f);
         for g in neighbours(topology, f) {
-            let dg = df + norm(sub(centroid(surface, g), cf));
+            let cg = centroid(surface, g);
+            let dg = df + norm(sub(cg, cf));
             if best.get(&g).is_none_or(|(old, _)| dg < *old) {
                 best.insert(g, (dg, f));
-                heap.push(Reverse((dg.to_bits(), g)));
+                heap.push(Reverse(((dg + estimate(cg)).to_bits(), g)));
             }
         }
     }
