@@ -119,6 +119,15 @@ enum Command {
         /// class wins (0: off).
         #[arg(long, default_value_t = LoopOptions::default().slide_steps)]
         slide_steps: usize,
+        /// A separating saddle below --min-bulge is a neck only if the curve one loop
+        /// radius away is at least this much longer than its loop, on both sides
+        /// (0: a cylinder).
+        #[arg(long, default_value_t = LoopOptions::default().min_opening)]
+        min_opening: f64,
+        /// ... and its loop is at most this many times the circumference of the
+        /// inscribed ball at the saddle (larger: a loop round a flat part).
+        #[arg(long, default_value_t = LoopOptions::default().max_flatness)]
+        max_flatness: f64,
         /// Write loops.obj, loops.ply, loops.json and critical.ply into this folder.
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -212,7 +221,8 @@ struct MethodArgs {
     #[arg(long, default_value_t = 32)]
     levels: usize,
     /// Scale space: smallest bulge ratio (the lobe's largest inscribed radius / the
-    /// neck's) of a neck that cuts off a part.
+    /// neck's) of a neck that cuts off a part; a separating saddle below it is a neck
+    /// only if its loop opens out on both sides (`loops --min-opening`).
     #[arg(long, default_value_t = 1.5)]
     min_bulge: f64,
     /// Scale space: levels a saddle must live to be a neck.
@@ -365,6 +375,8 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             method,
             plane_offsets,
             slide_steps,
+            min_opening,
+            max_flatness,
             output,
             png,
             volume,
@@ -374,6 +386,8 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
                 loops: LoopOptions {
                     plane_offsets,
                     slide_steps,
+                    min_opening,
+                    max_flatness,
                     ..LoopOptions::default()
                 },
                 // Neither flag: both kinds.

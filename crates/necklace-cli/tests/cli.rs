@@ -277,7 +277,7 @@ fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
     }
     assert!(!out_dir.join("field.vtu").exists(), "only with --volume");
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(json["version"], 1);
+    assert_eq!(json["version"], necklace::output::JSON_VERSION);
     for field in [
         "loops", "dropped", "morse", "timings", "sides", "units", "input", "flipped",
     ] {

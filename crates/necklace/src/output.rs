@@ -35,7 +35,7 @@ use crate::tet::TetMesh;
 
 /// The version of the JSON written by [`report_json`]; raised when a field changes
 /// meaning or disappears (new fields do not raise it).
-pub const JSON_VERSION: u64 = 1;
+pub const JSON_VERSION: u64 = 2;
 
 /// Colour of handle loops in pictures and PLY files (vermilion).
 pub const HANDLE_COLOR: [u8; 3] = [213, 62, 30];
@@ -249,10 +249,25 @@ pub fn barcode_picture(report: &NeckReport) -> Result<Option<render::Image>> {
         .iter()
         .filter(|s| s.bars.iter().any(|b| b.birth_scale > 0.0))
         .map(|s| {
-            let (name, color) = match s.side {
-                Side::Inside => ("inside: handle necks in colour", HANDLE_COLOR),
-                Side::Outside => ("outside: tunnel necks in colour", TUNNEL_COLOR),
+            let (name, color, kind) = match s.side {
+                Side::Inside => (
+                    "inside: handle necks in colour",
+                    HANDLE_COLOR,
+                    LoopKind::Handle,
+                ),
+                Side::Outside => (
+                    "outside: tunnel necks in colour",
+                    TUNNEL_COLOR,
+                    LoopKind::Tunnel,
+                ),
             };
+            // A neck: a selected saddle whose loop was kept.
+            let kept: Vec<usize> = report
+                .loops
+                .iter()
+                .filter(|l| l.kind == kind)
+                .flat_map(|l| std::iter::once(l.seed).chain(l.duplicates.iter().copied()))
+                .collect();
             render::barcode::BarPanel {
                 title: format!("{name}, {} tracks", s.bars.len()),
                 color,
@@ -263,7 +278,7 @@ pub fn barcode_picture(report: &NeckReport) -> Result<Option<render::Image>> {
                     .map(|b| render::barcode::BarSpan {
                         birth: b.birth_scale,
                         death: b.death_scale,
-                        highlight: b.selected,
+                        highlight: b.saddle.is_some_and(|i| kept.contains(&i)),
                     })
                     .collect(),
             }

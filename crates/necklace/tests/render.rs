@@ -250,7 +250,7 @@ fn a_run_writes_every_file_with_the_documented_fields() {
     // loops.json: version 1 and the documented top-level fields; reads back.
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("loops.json")).unwrap()).unwrap();
-    assert_eq!(json["version"], 1);
+    assert_eq!(json["version"], necklace::output::JSON_VERSION);
     for key in [
         "input", "units", "flipped", "loops", "dropped", "morse", "timings", "sides",
     ] {

@@ -18,12 +18,16 @@
 //!    collapses (slides off a cap) or does not settle is dropped with its reason.
 //! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; keep
 //!    one loop per neck (cycle-closing loops one per independent Z2 class, shortest
-//!    first; necks by bulge one per lobe and class); move each kept cycle-closing loop
+//!    first; necks by shape one per lobe and class, where a separating saddle whose lobe
+//!    bulges less than the Morse stage's `min_bulge` is a neck only if its loop opens
+//!    out on both sides by [`LoopOptions::min_opening`] ([`opening`]) round a roundish
+//!    neck ([`LoopOptions::max_flatness`])); move each kept cycle-closing loop
 //!    to the narrowest place of its handle or tunnel, whichever of its saddles the
 //!    lattice gave: parallel planes up to [`LoopOptions::slide_steps`] ×
 //!    [`LoopOptions::slide_step`] × diagonal away are cut and tightened, and the
 //!    shortest loop of its class wins; merge duplicates (centres
-//!    within `merge_distance` × diagonal and lengths within `merge_length`), keeping the
+//!    within `merge_distance` × diagonal and lengths within `merge_length`, or the same
+//!    class and each within `merge_overlap` × radius of the other), keeping the
 //!    highest persistence, then the shortest; order by persistence (descending), then
 //!    length.
 //!
@@ -34,6 +38,7 @@
 pub mod classes;
 pub mod cut;
 pub mod membrane;
+pub mod opening;
 pub mod tighten;
 
 use std::sync::OnceLock;
@@ -44,12 +49,13 @@ use serde::Serialize;
 
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
-use crate::geom::{add, cross, dot, norm, scale, sub};
+use crate::geom::{add, closest_on_segment, cross, dot, norm, scale, sub};
 use crate::mesh::{HomologyBasis, SurfaceMesh, Topology, Z2Basis};
 use crate::progress::{Progress, Silent};
 use cut::{closed_length, loop_around, plane_basis, plane_cut, Plane};
 use membrane::membrane_loop;
 pub use membrane::{MembraneFailure, MembraneOptions};
+use opening::Openings;
 use tighten::{tighten, SurfaceGeometry};
 pub use tighten::{SurfacePoint, TightenOptions, TightenStatus, Tightened};
 
@@ -94,6 +100,10 @@ pub struct Seed {
     pub bulge: Option<f64>,
     /// With `bulge`: an identifier of the lobe it cuts off (the maximum's track).
     pub lobe: Option<usize>,
+    /// A separating saddle whose lobe bulges less than the Morse stage's `min_bulge`: a
+    /// neck only if its loop opens out on both sides by [`LoopOptions::min_opening`]
+    /// (module [`opening`]). Default false.
+    pub needs_opening: bool,
 }
 
 /// Options of [`find_loops`].
@@ -114,6 +124,10 @@ pub struct LoopOptions {
     pub merge_distance: f64,
     /// ... and whose lengths differ by less than this fraction are duplicates. Default 0.02.
     pub merge_length: f64,
+    /// Two loops of the same class each within this × the smaller loop radius of the
+    /// other everywhere are duplicates too (one neck reached from two saddles, e.g. on
+    /// a short bar). Default 0.5.
+    pub merge_overlap: f64,
     /// Keep one cycle-closing loop per independent Z2 homology class of the surface,
     /// the shortest first, and drop cycle-closing loops that separate it (their cycle
     /// is filled again lower down: noise). Default true.
@@ -139,6 +153,19 @@ pub struct LoopOptions {
     pub membranes: MembraneUse,
     /// How membranes are built.
     pub membrane: MembraneOptions,
+    /// Smallest opening on each side (module [`opening`]) of the loop of a seed that
+    /// [`Seed::needs_opening`]: how much longer the curve one loop radius away is than
+    /// the loop. Default 0.1: a cylinder gives 0, tube noise up to 0.05 on the shared
+    /// models and shapes, the fertility's waist 0.16 and baby's neck 0.34.
+    pub min_opening: f64,
+    /// How far out the opening is measured, × the loop's radius `length / 2π`.
+    /// Default 1.
+    pub opening_reach: f64,
+    /// A seed that [`Seed::needs_opening`] must also have a roundish neck: its loop no
+    /// longer than this × the circumference of the inscribed ball at the saddle. Default
+    /// 3: necks measure 1.0–2.3 on the shared models, while loops round a plate (the
+    /// skull's cheek bones 7.6–16, the elephant's ear 6.3) open out on both sides too.
+    pub max_flatness: f64,
 }
 
 /// When the saddle's membrane (module [`membrane`]) gives the initial loop.
@@ -173,6 +200,7 @@ impl Default for LoopOptions {
             max_length: std::f64::consts::PI,
             merge_distance: 0.01,
             merge_length: 0.02,
+            merge_overlap: 0.5,
             homology_selection: true,
             plane_offsets: 16,
             offset_step: 0.00125,
@@ -180,6 +208,9 @@ impl Default for LoopOptions {
             slide_step: 0.005,
             membranes: MembraneUse::WherePlanesFail,
             membrane: MembraneOptions::default(),
+            min_opening: 0.1,
+            opening_reach: 1.0,
+            max_flatness: 3.0,
         }
     }
 }
@@ -240,6 +271,13 @@ pub struct NeckLoop {
     /// Separating: the areas of the two sides it cuts its surface component into,
     /// smaller first.
     pub areas: Option<[f64; 2]>,
+    /// How much the surface opens out on each side, smaller first (module [`opening`]):
+    /// how much longer than the loop the curve one loop radius away is (0 on a
+    /// cylinder, positive on both sides of a neck). `None` where it cannot be measured.
+    pub opening: Option<[f64; 2]>,
+    /// Its length over the circumference of the inscribed ball at its saddle (the exact
+    /// distance there): 1 round a round neck, larger round a flat one.
+    pub flatness: Option<f64>,
     /// Why it was kept, in words.
     pub reason: String,
     /// How tightening ended, and its geodesic diagnostics.
@@ -354,6 +392,20 @@ pub enum DropReason {
         /// Its own length.
         length: f64,
     },
+    /// A separating saddle whose lobe bulges less than `min_bulge`, and is no fatter
+    /// than the neck at all (bulge ≤ 1), or whose loop does not open out by
+    /// [`LoopOptions::min_opening`] on both sides (a bump on a tube), or goes round a
+    /// flat part ([`LoopOptions::max_flatness`]): not a neck.
+    NotANeck {
+        /// Its lobe's bulge ratio.
+        bulge: Option<f64>,
+        /// The smaller side's opening (`None`: not measurable).
+        opening: Option<f64>,
+        /// Its length over the circumference of the inscribed ball at its saddle.
+        flatness: Option<f64>,
+        /// Its length.
+        length: f64,
+    },
     /// A duplicate of a kept loop.
     Duplicate {
         /// Index of the kept loop in `loops`.
@@ -438,6 +490,14 @@ pub fn find_loops_with_progress(
     let topology = Topology::new(surface);
     let geometry = SurfaceGeometry::new(surface, &topology);
     let basis = HomologyBasis::new(surface, &topology);
+    let openings = Openings::new(surface, &topology, &geometry);
+    let measures = Measures {
+        surface,
+        topology: &topology,
+        basis: &basis,
+        openings: &openings,
+        reach: options.opening_reach,
+    };
     // Closest points for membranes, built when the first seed needs one.
     let distance = OnceLock::new();
     let preparation = start.elapsed().as_secs_f64();
@@ -449,9 +509,14 @@ pub fn find_loops_with_progress(
         .map(|seed| {
             let outcome = loop_from_seed(surface, &topology, &geometry, &distance, seed, options)
                 .map(|s| {
-                    let mut c =
-                        candidate(surface, &topology, &basis, s.tightened, s.offset, s.initial);
+                    let mut c = measures.candidate(s.tightened, s.offset, s.initial);
                     c.sources = s.sources;
+                    // The inscribed radius at the saddle: the exact distance there.
+                    let inscribed = distance
+                        .get_or_init(|| SurfaceDistance::new(surface))
+                        .distance(seed.position);
+                    c.flatness = (inscribed > 0.0)
+                        .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
                     c
                 });
             progress.advance(1);
@@ -477,7 +542,7 @@ pub fn find_loops_with_progress(
         }
     }
     let candidates = if options.homology_selection {
-        one_per_neck(seeds, kind, candidates, &mut dropped)
+        one_per_neck(seeds, kind, candidates, options, &mut dropped)
     } else {
         candidates
     };
@@ -485,7 +550,9 @@ pub fn find_loops_with_progress(
         .into_par_iter()
         .map(|(i, c)| {
             let c = if seeds[i].role == Some(Role::CycleClosing) {
-                narrowest(surface, &topology, &geometry, &basis, &seeds[i], c, options)
+                narrowest(
+                    surface, &topology, &geometry, &measures, &seeds[i], c, options,
+                )
             } else {
                 c
             };
@@ -532,15 +599,22 @@ fn check_inputs(surface: &SurfaceMesh, seeds: &[Seed], options: &LoopOptions) ->
     let positive = [
         options.max_length,
         options.merge_length,
+        options.opening_reach,
+        options.max_flatness,
         options.offset_step,
         options.slide_step,
         t.min_length_ratio,
         t.angle_tolerance,
     ];
+    let non_negative = [
+        options.merge_distance,
+        options.merge_overlap,
+        options.variation_angle,
+        t.rel_tolerance,
+    ];
     if positive.iter().any(|x| !(x.is_finite() && *x > 0.0))
-        || !(options.merge_distance.is_finite() && options.merge_distance >= 0.0)
-        || !(options.variation_angle.is_finite() && options.variation_angle >= 0.0)
-        || !(t.rel_tolerance.is_finite() && t.rel_tolerance >= 0.0)
+        || non_negative.iter().any(|x| !(x.is_finite() && *x >= 0.0))
+        || !options.min_opening.is_finite()
         || t.max_rounds == 0
     {
         return bad("loop options must be finite and positive (max_rounds at least 1)".into());
@@ -572,6 +646,10 @@ struct Candidate {
     class: Vec<u64>,
     /// When it separates the surface: the areas of its sides.
     areas: Option<[f64; 2]>,
+    /// The opening of its two sides, smaller first.
+    opening: Option<[f64; 2]>,
+    /// Its length over the circumference of the inscribed ball at its saddle.
+    flatness: Option<f64>,
 }
 
 /// One loop per neck. Cycle-closing loops: one per independent homology class, shortest
@@ -584,6 +662,7 @@ fn one_per_neck(
     seeds: &[Seed],
     kind: LoopKind,
     candidates: Vec<(usize, Candidate)>,
+    options: &LoopOptions,
     dropped: &mut Vec<DroppedLoop>,
 ) -> Vec<(usize, Candidate)> {
     let (mut cycles, mut rest): (Vec<_>, Vec<_>) = candidates
@@ -646,7 +725,26 @@ fn one_per_neck(
             }
         }
     }
-    // Necks by bulge: one per (lobe, class), the largest bulge first.
+    // Separating saddles that are not necks by their bulge must cut off a lobe fatter
+    // than the neck (bulge > 1: not a bump whose top is the saddle's neighbour), and
+    // open out on both sides round a roundish neck.
+    let (rest, flat): (Vec<_>, Vec<_>) = rest.into_iter().partition(|(i, c)| {
+        !seeds[*i].needs_opening
+            || (seeds[*i].bulge.is_some_and(|b| b > 1.0)
+                && c.opening.is_some_and(|o| o[0] >= options.min_opening)
+                && c.flatness.is_some_and(|f| f <= options.max_flatness))
+    });
+    for (i, c) in flat {
+        let reason = DropReason::NotANeck {
+            bulge: seeds[i].bulge,
+            opening: c.opening.map(|o| o[0]),
+            flatness: c.flatness,
+            length: c.tightened.length,
+        };
+        dropped.push(DroppedLoop::new(kind, seeds, i, reason));
+    }
+    // Necks by shape: one per (lobe, class), the largest bulge first.
+    let mut rest = rest;
     rest.sort_by(|(i, _), (j, _)| {
         let bulge = |k: usize| seeds[k].bulge.unwrap_or(f64::INFINITY);
         bulge(*j).total_cmp(&bulge(*i)).then(i.cmp(j))
@@ -680,29 +778,47 @@ fn one_per_neck(
     necks
 }
 
-/// A kept loop with its class, and the areas of its sides when it separates.
-fn candidate(
-    surface: &SurfaceMesh,
-    topology: &Topology,
-    basis: &HomologyBasis,
-    tightened: Tightened,
-    offset: f64,
-    initial: Initial,
-) -> Candidate {
-    let crossed = classes::crossings(surface, topology, &tightened.surface_points);
-    let class = basis.class_of_crossings(crossed.iter().copied());
-    let areas = class
-        .iter()
-        .all(|w| *w == 0)
-        .then(|| classes::sides(surface, topology, &tightened.surface_points, &crossed))
-        .flatten();
-    Candidate {
-        tightened,
-        offset,
-        initial,
-        sources: Vec::new(),
-        class,
-        areas,
+/// What a tightened loop is measured with: its homology class, the areas of its sides,
+/// and how the surface opens out on them.
+struct Measures<'a> {
+    surface: &'a SurfaceMesh,
+    topology: &'a Topology,
+    basis: &'a HomologyBasis,
+    openings: &'a Openings,
+    /// [`LoopOptions::opening_reach`].
+    reach: f64,
+}
+
+impl Measures<'_> {
+    /// A tightened loop with its class, the areas of its sides when it separates, and
+    /// its opening.
+    fn candidate(&self, tightened: Tightened, offset: f64, initial: Initial) -> Candidate {
+        let (surface, topology) = (self.surface, self.topology);
+        let crossed = classes::crossings(surface, topology, &tightened.surface_points);
+        let class = self.basis.class_of_crossings(crossed.iter().copied());
+        let areas = class
+            .iter()
+            .all(|w| *w == 0)
+            .then(|| classes::sides(surface, topology, &tightened.surface_points, &crossed))
+            .flatten();
+        let radius = tightened.length / (2.0 * std::f64::consts::PI);
+        let opening = self.openings.of_loop(
+            surface,
+            topology,
+            &tightened.surface_points,
+            &crossed,
+            self.reach * radius,
+        );
+        Candidate {
+            tightened,
+            offset,
+            initial,
+            sources: Vec::new(),
+            class,
+            areas,
+            opening,
+            flatness: None,
+        }
     }
 }
 
@@ -813,7 +929,7 @@ fn narrowest(
     surface: &SurfaceMesh,
     topology: &Topology,
     geometry: &SurfaceGeometry,
-    basis: &HomologyBasis,
+    measures: &Measures,
     seed: &Seed,
     c: Candidate,
     options: &LoopOptions,
@@ -832,8 +948,11 @@ fn narrowest(
             let Ok(t) = tightened(t) else { continue };
             // Shorter beyond round-off: the same geodesic reached again does not move it.
             if t.length < best.tightened.length * (1.0 - 1e-6) {
-                let other = candidate(surface, topology, basis, t, offset, Initial::Plane);
+                let mut other = measures.candidate(t, offset, Initial::Plane);
                 if other.class == best.class {
+                    other.flatness = best
+                        .flatness
+                        .map(|f| f * other.tightened.length / best.tightened.length);
                     best = other;
                 }
             }
@@ -919,13 +1038,25 @@ fn select(
             sources,
             class,
             areas,
+            opening,
+            flatness,
         } = c;
         let membrane =
             membrane::spanning_disk(seeds[i].position, seeds[i].normal, &sources, &t.points);
         let center = centroid(&t.points);
+        let homology = class_string(&class, basis_len);
+        let radius = t.length / (2.0 * std::f64::consts::PI);
         let duplicate_of = loops.iter().position(|l| {
-            norm(sub(l.center, center)) <= options.merge_distance * diagonal
-                && (l.length - t.length).abs() <= options.merge_length * l.length.max(t.length)
+            let close = norm(sub(l.center, center)) <= options.merge_distance * diagonal
+                && (l.length - t.length).abs() <= options.merge_length * l.length.max(t.length);
+            // The same neck reached from two saddles: the same class, and each loop
+            // within half a radius of the other everywhere.
+            let tolerance = options.merge_overlap * l.radius.min(radius);
+            close
+                || (l.homology == homology
+                    && norm(sub(l.center, center)) <= l.radius + radius
+                    && within(&l.points, &t.points, tolerance)
+                    && within(&t.points, &l.points, tolerance))
         });
         if let Some(of) = duplicate_of {
             loops[of].duplicates.push(i);
@@ -963,8 +1094,10 @@ fn select(
             death_scale: seed.scales.1,
             bulge: seed.bulge,
             separating: class.iter().all(|w| *w == 0),
-            homology: class_string(&class, basis_len),
+            homology,
             areas,
+            opening,
+            flatness,
             reason,
             tightening: TighteningReport {
                 status: t.status,
@@ -984,6 +1117,14 @@ fn select(
         });
     }
     loops
+}
+
+/// Whether every point of `a` lies within `tolerance` of the closed polyline `b`.
+fn within(a: &[[f64; 3]], b: &[[f64; 3]], tolerance: f64) -> bool {
+    let n = b.len();
+    a.iter().all(|&p| {
+        (0..n).any(|i| norm(sub(p, closest_on_segment(p, b[i], b[(i + 1) % n]))) <= tolerance)
+    })
 }
 
 /// A class as one `0`/`1` character per basis cycle.

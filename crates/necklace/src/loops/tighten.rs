@@ -149,6 +149,11 @@ impl<'a> SurfaceGeometry<'a> {
         }
     }
 
+    /// The sum of the face angles at each vertex.
+    pub fn total_angles(&self) -> &[f64] {
+        &self.total_angle
+    }
+
     fn pos(&self, v: u32) -> [f64; 3] {
         self.mesh.positions[v as usize]
     }

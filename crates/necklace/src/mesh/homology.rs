@@ -31,37 +31,19 @@ impl HomologyBasis {
         let edges = topology.edges();
         let nv = mesh.num_vertices();
 
-        // Vertex -> edges (CSR), edges in index order.
-        let mut start = vec![0u32; nv + 1];
-        for e in edges {
-            start[e[0] as usize + 1] += 1;
-            start[e[1] as usize + 1] += 1;
-        }
-        for v in 0..nv {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut vertex_edges = vec![0u32; 2 * edges.len()];
-        for (i, e) in edges.iter().enumerate() {
-            for &v in e {
-                vertex_edges[fill[v as usize] as usize] = i as u32;
-                fill[v as usize] += 1;
-            }
-        }
-
         // Primal spanning forest: parent edge and depth per vertex.
         let mut in_tree = vec![false; edges.len()];
         let mut parent_edge = vec![u32::MAX; nv];
         let mut depth = vec![u32::MAX; nv];
         let mut queue = VecDeque::new();
         for root in 0..nv {
-            if depth[root] != u32::MAX || start[root] == start[root + 1] {
+            if depth[root] != u32::MAX || topology.vertex_edges(root).is_empty() {
                 continue;
             }
             depth[root] = 0;
             queue.push_back(root);
             while let Some(v) = queue.pop_front() {
-                for &e in &vertex_edges[start[v] as usize..start[v + 1] as usize] {
+                for &e in topology.vertex_edges(v) {
                     let [a, b] = edges[e as usize];
                     let u = if a as usize == v { b } else { a } as usize;
                     if depth[u] == u32::MAX {

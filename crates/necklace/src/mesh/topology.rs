@@ -3,7 +3,8 @@
 use super::SurfaceMesh;
 
 /// Adjacency of a triangle mesh: unique undirected edges with their incident faces,
-/// the edges of each face, and the faces around each vertex (all in CSR form).
+/// the edges of each face, and the faces and edges around each vertex (all in CSR
+/// form).
 ///
 /// Self-loop "edges" of degenerate triangles (a triangle that repeats a vertex index)
 /// are left out; such triangles are counted by the report as degenerate.
@@ -16,6 +17,8 @@ pub struct Topology {
     face_edges: Vec<[u32; 3]>,
     vertex_face_start: Vec<u32>,
     vertex_faces: Vec<u32>,
+    vertex_edge_start: Vec<u32>,
+    vertex_edges: Vec<u32>,
 }
 
 const NO_EDGE: u32 = u32::MAX;
@@ -74,6 +77,24 @@ impl Topology {
             }
         }
 
+        // Vertex -> edges, in edge order.
+        let mut vertex_edge_start = vec![0u32; nv + 1];
+        for e in &edges {
+            vertex_edge_start[e[0] as usize + 1] += 1;
+            vertex_edge_start[e[1] as usize + 1] += 1;
+        }
+        for v in 0..nv {
+            vertex_edge_start[v + 1] += vertex_edge_start[v];
+        }
+        let mut fill = vertex_edge_start.clone();
+        let mut vertex_edges = vec![0u32; 2 * edges.len()];
+        for (i, e) in edges.iter().enumerate() {
+            for &v in e {
+                vertex_edges[fill[v as usize] as usize] = i as u32;
+                fill[v as usize] += 1;
+            }
+        }
+
         Topology {
             num_vertices: nv,
             edges,
@@ -82,6 +103,8 @@ impl Topology {
             face_edges,
             vertex_face_start,
             vertex_faces,
+            vertex_edge_start,
+            vertex_edges,
         }
     }
 
@@ -112,6 +135,12 @@ impl Topology {
     pub fn vertex_faces(&self, v: usize) -> &[u32] {
         let (s, t) = (self.vertex_face_start[v], self.vertex_face_start[v + 1]);
         &self.vertex_faces[s as usize..t as usize]
+    }
+
+    /// Edges at vertex `v`, in edge order.
+    pub fn vertex_edges(&self, v: usize) -> &[u32] {
+        let (s, t) = (self.vertex_edge_start[v], self.vertex_edge_start[v + 1]);
+        &self.vertex_edges[s as usize..t as usize]
     }
 
     /// Edges with exactly one incident face.

@@ -28,10 +28,14 @@
 //! 4. select. Scale space: a 2-saddle track is a neck candidate when it lives at least
 //!    `min_levels` levels, its Hessian has signature (−, −, +) at some level, and it is
 //!    cycle-closing at such a level (then its *representative* level, where it is
-//!    placed, is its first fitted one, the least smoothed), or separating with a bulge ratio of at least `min_bulge` (the level of the
-//!    largest ratio); a track that only ever closes local cycles is noise. Each
-//!    candidate carries its largest passing bulge and the lobe (maximum track) it cuts
-//!    off there, also when it is cycle-closing at other levels. Paper: the 2-saddles
+//!    placed, is its first fitted one, the least smoothed), or separating (placed at
+//!    the level of its largest bulge ratio); a track that only ever closes local cycles
+//!    is noise. A separating candidate whose bulge reaches `min_bulge` is a neck by its
+//!    lobe alone (`Saddle::by_bulge`); one below it is passed on all the same, and the
+//!    loop stage keeps it only where its loop opens out on both sides (a waist, a
+//!    baby's neck: `loops::opening`). Each candidate carries its largest bulge and the
+//!    lobe (maximum track) it cuts off there, also when it is cycle-closing at other
+//!    levels (then only a passing bulge). Paper: the 2-saddles
 //!    alive at the last step that survived `min_persistence` steps and pass the Hessian
 //!    test. In both, saddles closer than the matching radius are one neck (keep the
 //!    most persistent), and every 2-saddle track not kept is listed with the reason.
@@ -97,12 +101,13 @@ pub struct MorseOptions {
     /// Scale space: levels a 2-saddle track must live to be a neck (default 3: about
     /// 1.2× in scale at the default 32 levels over 8×).
     pub min_levels: usize,
-    /// Scale space: smallest bulge ratio of a separating neck: the unsmoothed distance
-    /// (inscribed radius) near the lobe's maximum over the one near the saddle, at one
-    /// level (default 1.5: above the bumps where tubes meet, up to 1.26 on the analytic
-    /// shapes (a pretzel's junction) and 1.35 at the wire sphere's nodes; this also
-    /// leaves out the thinnest bulges a person may call necks, 1.36 at the fertility's
-    /// baby's neck, 1.48 at the armadillo's arm).
+    /// Scale space: smallest bulge ratio of a separating neck by its lobe alone: the
+    /// unsmoothed distance (inscribed radius) near the lobe's maximum over the one near
+    /// the saddle, at one level (default 1.5: above the bumps where tubes meet, up to
+    /// 1.26 on the analytic shapes (a pretzel's junction) and 1.35 at the wire sphere's
+    /// nodes). Thinner bulges a person calls necks (1.36 at the fertility's baby's neck,
+    /// 1.10 at its mother's waist, where the body is flat) are judged by the loop stage
+    /// instead, by how the surface opens out on both sides of their loops.
     pub min_bulge: f64,
     /// Paper: heat time step `τ` in units where the surface's bounding box has longest
     /// side 1 (default 0.01, the paper's `λh`).
@@ -221,6 +226,10 @@ pub struct Saddle {
     /// cycle-closing one only when it reaches `min_bulge` (it is then a neck by its
     /// shape as well as a cycle).
     pub bulge: Option<f64>,
+    /// Whether that bulge reaches `min_bulge`: a neck by the shape of its lobe. A
+    /// separating saddle below it is selected all the same, and the loop stage keeps
+    /// it only where its loop opens out on both sides (`loops::opening`).
+    pub by_bulge: bool,
     /// With `bulge`: the track of the maximum of the lobe it cuts off at that level.
     pub lobe: Option<usize>,
     /// Cycle-closing: at some fitted level (its representative step on the paper's
@@ -266,8 +275,8 @@ pub enum RejectReason {
     /// At every level where its Hessian fits, it closes only a cycle within a few
     /// edges of itself, with no separating 2-saddle there: lattice noise.
     LocalCycle,
-    /// Separating, but the lobe it cuts off is not fatter than the neck by
-    /// `min_bulge`: a bump on a tube, not a neck.
+    /// Separating, but the lobe it cuts off is no fatter than the neck (bulge ≤ 1: the
+    /// lobe's top is a neighbour of the saddle): a bump, not a part.
     LowBulge {
         /// Its largest bulge ratio.
         bulge: f64,
@@ -364,6 +373,8 @@ pub struct Bar {
     pub vertex: u32,
     /// Whether it was selected.
     pub selected: bool,
+    /// When selected: its index in [`MorseResult::saddles`].
+    pub saddle: Option<usize>,
 }
 
 impl MorseResult {
@@ -507,7 +518,7 @@ pub fn analyze_with_progress(
                 &tracker.tracks,
                 &observations,
                 min_persistence,
-                options.track_radius,
+                (options.track_radius, options.min_bulge),
                 &scale_of,
             )
         }
@@ -714,15 +725,20 @@ fn select_over_scales(
                 rejected.push(reject(&last, RejectReason::LocalCycle));
                 continue;
             }
+            // Separating: placed at its level of the largest bulge. Below `min_bulge` it
+            // is still a candidate, which the loop stage keeps if its loop opens out on
+            // both sides (`loops::opening`); but not when its lobe is no fatter than the
+            // neck at all.
             (None, Some(&(o, h))) => {
                 let bulge = widest_bulge.unwrap_or(f64::INFINITY);
-                if bulge < options.min_bulge {
+                if bulge <= 1.0 {
                     rejected.push(reject(o, RejectReason::LowBulge { bulge }));
                     continue;
                 }
                 (o, h, SaddleRole::Separating)
             }
         };
+        let by_bulge = widest_bulge.is_some_and(|b| b >= options.min_bulge);
         // A neck by its shape: separating, or cycle-closing and separating with a
         // passing bulge at another level.
         let necked = widest
@@ -744,6 +760,7 @@ fn select_over_scales(
             death_scale,
             role,
             bulge: necked.and_then(|w| w.role.bulge),
+            by_bulge,
             lobe: necked.and_then(|w| w.lobe),
             essential: fitted.iter().any(|(o, _)| o.role.essential),
             hessian: h,
@@ -762,7 +779,7 @@ fn select_at_last_step(
     tracks: &[Track],
     observations: &[Vec<Observation>],
     min_persistence: usize,
-    track_radius: f64,
+    (track_radius, min_bulge): (f64, f64),
     scale_of: &dyn Fn(usize) -> Option<f64>,
 ) -> (Vec<Saddle>, Vec<RejectedSaddle>) {
     let mut saddles = Vec::new();
@@ -808,6 +825,9 @@ fn select_at_last_step(
                 death_scale: None,
                 role: last.map_or(SaddleRole::CycleClosing, |o| o.role.role),
                 bulge: last.and_then(|o| o.role.bulge),
+                by_bulge: last
+                    .and_then(|o| o.role.bulge)
+                    .is_some_and(|b| b >= min_bulge),
                 lobe: last.and_then(|o| o.lobe),
                 essential: last.is_some_and(|o| o.role.essential),
                 hessian: h,
@@ -821,17 +841,22 @@ fn select_at_last_step(
 }
 
 /// Saddles within the matching radius of a more persistent one (then one with a
-/// shorter Newton step) are duplicates of it. Returns the kept ones, most persistent
-/// first, and the duplicates.
+/// shorter Newton step; a neck by its cycle or bulge before one the loop stage still
+/// judges) are duplicates of it. Returns the kept ones in that order, and the
+/// duplicates.
 fn merge_close(
     mesh: &TetMesh,
     mut saddles: Vec<Saddle>,
     track_radius: f64,
 ) -> (Vec<Saddle>, Vec<RejectedSaddle>) {
     let step = |s: &Saddle| norm(sub(s.position, s.vertex_position));
+    // A saddle that is a neck already (by its cycle or its bulge) before one that the
+    // loop stage still has to judge.
+    let pending = |s: &Saddle| s.role == SaddleRole::Separating && !s.by_bulge;
     saddles.sort_by(|a, b| {
-        b.persistence
-            .cmp(&a.persistence)
+        pending(a)
+            .cmp(&pending(b))
+            .then(b.persistence.cmp(&a.persistence))
             .then(step(a).total_cmp(&step(b)))
             .then(a.vertex.cmp(&b.vertex))
             .then(a.step.cmp(&b.step))
@@ -866,6 +891,12 @@ fn barcode(
         })
         .map(|(t, track)| {
             let seen = &observations[t];
+            let saddle = saddles.iter().position(|s| {
+                s.born == track.born
+                    && seen
+                        .iter()
+                        .any(|o| o.vertex == s.vertex && o.step == s.step)
+            });
             Bar {
                 birth_scale: scale_of(track.born).unwrap_or(0.0),
                 death_scale: if track.alive {
@@ -875,12 +906,8 @@ fn barcode(
                 },
                 cycle_closing: seen.iter().any(|o| o.role.role == SaddleRole::CycleClosing),
                 vertex: track.vertex,
-                selected: saddles.iter().any(|s| {
-                    s.born == track.born
-                        && seen
-                            .iter()
-                            .any(|o| o.vertex == s.vertex && o.step == s.step)
-                }),
+                selected: saddle.is_some(),
+                saddle,
             }
         })
         .collect();

@@ -401,7 +401,8 @@ pub struct NeckTimings {
 
 /// The loop stage's seeds from the Morse stage's selected 2-saddles, in their order:
 /// the plane through each saddle's fitted position with its Hessian's positive
-/// eigenvector as normal.
+/// eigenvector as normal. A separating saddle whose bulge is below `min_bulge` is a
+/// neck only if its loop opens out on both sides (`Seed::needs_opening`).
 pub fn loop_seeds(result: &MorseResult) -> Vec<Seed> {
     result
         .saddles
@@ -419,6 +420,10 @@ pub fn loop_seeds(result: &MorseResult) -> Vec<Seed> {
             scales: (s.birth_scale, s.death_scale),
             bulge: s.bulge,
             lobe: s.lobe,
+            // The paper's schedule keeps what it selects, as the paper does.
+            needs_opening: result.schedule == Schedule::ScaleSpace
+                && s.role == SaddleRole::Separating
+                && !s.by_bulge,
         })
         .collect()
 }
