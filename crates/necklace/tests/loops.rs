@@ -1061,10 +1061,11 @@ fn opening_at_waist(r: impl Fn(f64) -> f64, h: f64) -> [f64; 2] {
         })
         .collect();
     assert!(mesh.positions[first][2].abs() < 1e-12);
+    let positions: Vec<[f64; 3]> = (0..segments).map(|j| mesh.positions[first + j]).collect();
     let crossed = crossings(&mesh, &topology, &points);
     let geometry = SurfaceGeometry::new(&mesh, &topology);
     Openings::new(&mesh, &topology, &geometry)
-        .of_loop(&mesh, &topology, &points, &crossed, r(0.0))
+        .of_loop(&mesh, &topology, &points, &positions, &crossed, r(0.0))
         .unwrap()
 }
 

@@ -118,7 +118,7 @@ fn face_area(surface: &SurfaceMesh, f: usize) -> f64 {
 }
 
 /// The vertices a point lies on: one (a vertex) or two (an edge).
-fn carrier(p: SurfacePoint) -> ([u32; 2], usize) {
+pub(super) fn carrier(p: SurfacePoint) -> ([u32; 2], usize) {
     match p {
         SurfacePoint::Edge { edge, .. } => (edge, 2),
         SurfacePoint::Vertex { vertex } => ([vertex, vertex], 1),

@@ -806,6 +806,7 @@ impl Measures<'_> {
             surface,
             topology,
             &tightened.surface_points,
+            &tightened.points,
             &crossed,
             self.reach * radius,
         );

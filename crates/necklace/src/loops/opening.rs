@@ -32,9 +32,10 @@
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
-use crate::geom::{cross, dot, lerp, norm, sub};
+use crate::geom::{cross, dot, norm, sub};
 use crate::mesh::{SurfaceMesh, Topology};
 
+use super::classes::carrier;
 use super::tighten::{SurfaceGeometry, SurfacePoint};
 
 /// The angle defect of every vertex, and the length of every edge.
@@ -81,8 +82,8 @@ impl Openings {
         Openings { defect, length }
     }
 
-    /// The opening of each side of the loop through `points` (which crosses the edges
-    /// `crossed`, as [`classes::crossings`](super::classes::crossings) gives them),
+    /// The opening of each side of the loop through `points` (at `positions`; it crosses
+    /// the edges `crossed`, as [`classes::crossings`](super::classes::crossings) gives them),
     /// measured out to `reach` (`W`), smaller first. `None` when a side has no vertex
     /// within `reach` (edges longer than the loop's radius), or its two sides meet
     /// within `reach` (the band around it is not two-sided there: a short handle).
@@ -91,6 +92,7 @@ impl Openings {
         surface: &SurfaceMesh,
         topology: &Topology,
         points: &[SurfacePoint],
+        positions: &[[f64; 3]],
         crossed: &[usize],
         reach: f64,
     ) -> Option<[f64; 2]> {
@@ -145,32 +147,34 @@ impl Openings {
         let mut stack = Vec::new();
         let n = points.len();
         for i in 0..n {
-            let (p, q) = (points[i], points[(i + 1) % n]);
-            let (a, b) = (self.point(surface, p), self.point(surface, q));
+            let (a, b) = (positions[i], positions[(i + 1) % n]);
             // The faces the segment lies in: one, or the two of an edge it runs along.
-            let carriers: Vec<u32> = [p, q].iter().flat_map(|x| carrier(*x)).collect();
+            let ((p, pn), (q, qn)) = (carrier(points[i]), carrier(points[(i + 1) % n]));
+            let carriers: Vec<u32> = p[..pn].iter().chain(&q[..qn]).copied().collect();
             let faces = topology
                 .vertex_faces(carriers[0] as usize)
                 .iter()
                 .map(|&f| f as usize)
                 .filter(|&f| carriers.iter().all(|v| surface.triangles[f].contains(v)));
-            for (f, &v) in faces.flat_map(|f| surface.triangles[f].iter().map(move |v| (f, v))) {
+            for f in faces {
                 let normal = surface.face_normal_scaled(f);
-                if on_loop.contains(&v) || !settled.contains_key(&v) {
-                    continue;
-                }
-                let turn = dot(
-                    cross(sub(b, a), sub(surface.positions[v as usize], a)),
-                    normal,
-                );
-                if turn == 0.0 {
-                    continue;
-                }
-                let label = u8::from(turn < 0.0);
-                match side.insert(v, label) {
-                    None => stack.push(v),
-                    Some(old) if old != label => return None,
-                    Some(_) => {}
+                for v in surface.triangles[f] {
+                    if on_loop.contains(&v) || !settled.contains_key(&v) {
+                        continue;
+                    }
+                    let turn = dot(
+                        cross(sub(b, a), sub(surface.positions[v as usize], a)),
+                        normal,
+                    );
+                    if turn == 0.0 {
+                        continue;
+                    }
+                    let label = u8::from(turn < 0.0);
+                    match side.insert(v, label) {
+                        None => stack.push(v),
+                        Some(old) if old != label => return None,
+                        Some(_) => {}
+                    }
                 }
             }
         }
@@ -220,18 +224,6 @@ impl Openings {
         Some(opening)
     }
 
-    /// The position of a point of a loop.
-    fn point(&self, surface: &SurfaceMesh, p: SurfacePoint) -> [f64; 3] {
-        match p {
-            SurfacePoint::Edge { edge: [a, b], t } => lerp(
-                surface.positions[a as usize],
-                surface.positions[b as usize],
-                t,
-            ),
-            SurfacePoint::Vertex { vertex } => surface.positions[vertex as usize],
-        }
-    }
-
     /// The neighbours of `v`, with the edge to each and its length.
     fn slots<'a>(
         &'a self,
@@ -242,14 +234,6 @@ impl Openings {
             let [a, b] = topology.edges()[e as usize];
             (if a == v { b } else { a }, e, self.length[e as usize])
         })
-    }
-}
-
-/// The vertices a point of a loop lies on: an edge's two, or one.
-fn carrier(p: SurfacePoint) -> Vec<u32> {
-    match p {
-        SurfacePoint::Edge { edge, .. } => edge.to_vec(),
-        SurfacePoint::Vertex { vertex } => vec![vertex],
     }
 }
 
