@@ -928,6 +928,8 @@ fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
             .map(|c| c.genus)
             .sum();
         for m in &r.morse {
+            // The Morse sum holds at every level of both sides.
+            assert!(m.ok, "{} {:?}: Morse sum", file.display(), m.side);
             assert!(
                 m.cycles_ok,
                 "{} {:?}: {:?}",
