@@ -125,6 +125,9 @@ pub fn run(
     schedule: Schedule,
     ui: &Ui,
 ) -> Result<String> {
+    if let Some(path) = csv {
+        necklace::file::check_output_file(path)?;
+    }
     let files = io::mesh_files(dir)?;
     if files.is_empty() {
         return Err(necklace::Error::invalid_argument(format!(
@@ -148,7 +151,13 @@ pub fn run(
     for file in &files {
         let name = model_name(file);
         let surface = match io::read_mesh(file) {
-            Ok(mesh) => pipeline::orient_for_volume(mesh).0,
+            Ok(mesh) => match pipeline::prepare_input(mesh) {
+                Ok(prepared) => prepared.mesh,
+                Err(e) => {
+                    print_now(&format!("| {name} | – | error: {e} |"));
+                    continue;
+                }
+            },
             Err(e) => {
                 print_now(&format!("| {name} | – | error: {e} |"));
                 continue;
@@ -170,8 +179,7 @@ pub fn run(
     }
     let mut out = format!("slowest: {} ({:.2} s)\n", slowest.1, slowest.0);
     if let Some(path) = csv {
-        std::fs::write(path, &csv_text)
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        necklace::file::write_atomic(path, csv_text.as_bytes())?;
         let _ = writeln!(out, "table -> {}", path.display());
     }
     if let Some(model) = scaling {
@@ -199,7 +207,7 @@ fn h_series(
         .or(if model.is_none() { files.first() } else { None })
         .with_context(|| format!("no model named like '{wanted}' for the h series"))?;
     let name = model_name(file);
-    let surface = pipeline::orient_for_volume(io::read_mesh(file)?).0;
+    let surface = pipeline::prepare_input(io::read_mesh(file)?)?.mesh;
     let diagonal = surface.bbox_diagonal();
     print_now(&format!("\nh series on {name} (handles):"));
     print_now("| h = diagonal / k | tets | unknowns | preprocessing s | smoothing s | critical points s | loop computation s | total s | loops |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
@@ -261,8 +269,7 @@ fn h_series(
     };
     let csv_path = stem.with_extension("csv");
     let png_path = stem.with_extension("png");
-    std::fs::write(&csv_path, text)
-        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    necklace::file::write_atomic(&csv_path, text.as_bytes())?;
     let figure = Chart {
         title: format!("{name}: seconds per stage against volume size"),
         x_label: "tetrahedra".into(),

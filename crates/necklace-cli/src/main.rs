@@ -11,6 +11,8 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use necklace::error::printable;
+use necklace::file::{check_output_file, check_output_folder};
 use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Schedule};
 use necklace::output::OutputOptions;
@@ -61,11 +63,11 @@ enum Command {
         #[arg(long)]
         exterior: bool,
         /// Lattice spacing along the surface (default: bounding-box diagonal / 64).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         h: Option<f64>,
         /// The most tets the volume mesh may have: a larger run is refused, and thin
         /// parts are not refined past it.
-        #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS)]
+        #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS, allow_negative_numbers = true)]
         max_tets: usize,
         /// The volume mesher: necklace's isosurface stuffing, or TetGen "pq1.2" (needs a
         /// build with --features tetgen, which is AGPL-3.0).
@@ -112,21 +114,21 @@ enum Command {
         method: MethodArgs,
         /// Where the plane through a saddle has no curve around it: parallel planes tried
         /// on each side, 0.125 % of the diagonal apart.
-        #[arg(long, default_value_t = LoopOptions::default().plane_offsets)]
+        #[arg(long, default_value_t = LoopOptions::default().plane_offsets, allow_negative_numbers = true)]
         plane_offsets: usize,
         /// A kept cycle-closing loop is also cut from parallel planes up to this many
         /// steps (0.5 % of the diagonal) away on each side, and the shortest loop of its
         /// class wins (0: off).
-        #[arg(long, default_value_t = LoopOptions::default().slide_steps)]
+        #[arg(long, default_value_t = LoopOptions::default().slide_steps, allow_negative_numbers = true)]
         slide_steps: usize,
         /// A separating saddle below --min-bulge is a neck only if the curve one loop
         /// radius away is at least this much longer than its loop, on both sides
         /// (0: a cylinder).
-        #[arg(long, default_value_t = LoopOptions::default().min_opening)]
+        #[arg(long, default_value_t = LoopOptions::default().min_opening, allow_negative_numbers = true)]
         min_opening: f64,
         /// ... and its loop is at most this many times the circumference of the
         /// inscribed ball at the saddle (larger: a loop round a flat part).
-        #[arg(long, default_value_t = LoopOptions::default().max_flatness)]
+        #[arg(long, default_value_t = LoopOptions::default().max_flatness, allow_negative_numbers = true)]
         max_flatness: f64,
         /// Write loops.obj, loops.ply, loops.json and critical.ply into this folder.
         #[arg(short, long)]
@@ -155,13 +157,13 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
         /// Width in pixels.
-        #[arg(long, default_value_t = 1200)]
+        #[arg(long, default_value_t = 1200, allow_negative_numbers = true)]
         size: u32,
         /// Number of views: three-quarter, front, side, top (1 to 4).
-        #[arg(long, default_value_t = 4)]
+        #[arg(long, default_value_t = 4, allow_negative_numbers = true)]
         views: usize,
         /// Opacity of the surface over loops and saddles behind it (0 to 1).
-        #[arg(long, default_value_t = 0.7)]
+        #[arg(long, default_value_t = 0.7, allow_negative_numbers = true)]
         opacity: f64,
     },
     /// Run the whole method on built-in shapes (a chain of balls, a varying torus, a
@@ -218,30 +220,34 @@ struct MethodArgs {
     #[arg(long, value_enum, default_value_t = ScheduleArg::Scales)]
     schedule: ScheduleArg,
     /// Scale space: classified levels.
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
     levels: usize,
     /// Scale space: smallest bulge ratio (the lobe's largest inscribed radius / the
     /// neck's) of a neck that cuts off a part; a separating saddle below it is a neck
     /// only if its loop opens out on both sides (`loops --min-opening`).
-    #[arg(long, default_value_t = 1.5)]
+    #[arg(long, default_value_t = 1.5, allow_negative_numbers = true)]
     min_bulge: f64,
     /// Scale space: levels a saddle must live to be a neck.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
     min_levels: usize,
     /// Paper schedule: last smoothing step N (classification runs from step 10 to N).
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, allow_negative_numbers = true)]
     steps: usize,
     /// Paper schedule: heat time step in units where the bounding box's longest side
     /// is 1.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
     tau: f64,
     /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     h: Option<f64>,
     /// The most tets a volume mesh may have: a larger run is refused, and thin parts
     /// are not refined past it.
-    #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS)]
+    #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS, allow_negative_numbers = true)]
     max_tets: usize,
+    /// The most heat steps (--levels, or --steps with the paper schedule) a run may
+    /// take: more is refused before any work.
+    #[arg(long, default_value_t = necklace::morse::DEFAULT_MAX_STEPS, allow_negative_numbers = true)]
+    max_steps: usize,
 }
 
 impl MethodArgs {
@@ -261,6 +267,7 @@ impl MethodArgs {
             min_levels: self.min_levels,
             steps: self.steps,
             tau: self.tau,
+            max_steps: self.max_steps,
             ..MorseOptions::default()
         }
     }
@@ -299,20 +306,20 @@ fn parse_param(s: &str) -> std::result::Result<(String, f64), String> {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(err) => return argument_error(&err),
+    };
     let ui = Ui {
         bars: Bars::new(!cli.quiet),
         verbose: cli.verbose,
     };
     match run(cli.command, &ui) {
-        Ok(text) => {
-            // A closed pipe (`necklace ... | head`) is not an error worth a message.
-            let _ = std::io::stdout().lock().write_all(text.as_bytes());
-            ExitCode::SUCCESS
-        }
+        Ok(text) => print_stdout(&text),
         Err(err) => {
-            eprintln!("necklace: {err:#}");
-            // Library errors are about the input or the arguments: status 2.
+            eprintln!("necklace: {}", printable(&format!("{err:#}")));
+            // Library errors are about the input, the arguments or the files named:
+            // status 2; anything else is ours: 1.
             if err.downcast_ref::<necklace::Error>().is_some() {
                 ExitCode::from(2)
             } else {
@@ -320,6 +327,50 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// Print a command's output. A closed pipe (`necklace ... | head`) is not worth a
+/// message; any other failure (a full disk) is, with status 2 like every failed write.
+fn print_stdout(text: &str) -> ExitCode {
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("necklace: cannot write to stdout: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// Help and version go to stdout as clap writes them; every other argument error is one
+/// line on stderr with status 2.
+fn argument_error(err: &clap::Error) -> ExitCode {
+    use clap::error::ErrorKind as K;
+    if matches!(err.kind(), K::DisplayHelp | K::DisplayVersion) {
+        let _ = err.print();
+        return ExitCode::SUCCESS;
+    }
+    let rendered = err.render().to_string();
+    let mut lines = rendered.lines().map(str::trim).filter(|l| !l.is_empty());
+    let first = lines.next().unwrap_or("bad arguments");
+    let mut line = first.trim_start_matches("error: ").to_string();
+    // Keep clap's tips (a similar flag), one line; drop its advice to use `--`, which
+    // does not apply (negative numbers are taken as values).
+    for tip in lines.filter_map(|l| l.strip_prefix("tip: ")) {
+        if !tip.contains("'--") || tip.contains("similar") {
+            line += &format!("; {tip}");
+        }
+    }
+    if err.kind() == K::DisplayHelpOnMissingArgumentOrSubcommand {
+        line = "a command is needed (info, volume, critical, loops, render, demo, bench, shape)"
+            .into();
+    }
+    eprintln!("necklace: {}; see necklace --help", printable(&line));
+    ExitCode::from(2)
 }
 
 /// What every command may use to talk to the user besides its output.
@@ -449,7 +500,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
 
 fn info(path: PathBuf, json: bool) -> Result<String> {
     let mesh = io::read_mesh(&path)?;
-    let report = MeshReport::new(&mesh);
+    let report = pipeline::inspect_surface(&mesh);
     if json {
         let mut value = serde_json::to_value(&report).context("encoding the report")?;
         value["file"] = serde_json::Value::String(path.display().to_string());
@@ -467,7 +518,13 @@ fn critical(
     output: Option<PathBuf>,
     json: bool,
 ) -> Result<String> {
-    let (surface, surface_report) = read_for_volume(&path)?;
+    if let Some(output) = &output {
+        io::check_point_cloud_name(output)?;
+        check_output_file(output)?;
+    }
+    options.check()?;
+    let surface = read_prepared(&path)?;
+    let surface_report = MeshReport::new(&surface);
     let side = if exterior {
         Side::Outside
     } else {
@@ -571,8 +628,12 @@ fn loops(
     json: bool,
     ui: &Ui,
 ) -> Result<String> {
-    let (surface, _) = read_for_volume(&path)?;
+    if let Some((dir, _)) = &output {
+        check_output_folder(dir)?;
+    }
+    let surface = io::read_mesh(&path)?;
     let report = pipeline::find_necks_with_progress(&surface, options, &ui.bars)?;
+    note(&path, &report.notes);
     warn(&report.warnings);
     warn_morse_failures(&report);
     if ui.verbose {
@@ -580,7 +641,7 @@ fn loops(
     }
     let mut written = Vec::new();
     if let Some((dir, files)) = &output {
-        written = necklace::output::write_run(dir, &surface, &report, files, Some(&path))?;
+        written = necklace::output::write_run(dir, &report.surface, &report, files, Some(&path))?;
     }
     if json {
         let value = necklace::output::report_json(&report, Some(&path))?;
@@ -614,7 +675,14 @@ fn loops(
 /// Print warnings to stderr, one line each.
 fn warn(warnings: &[String]) {
     for w in warnings {
-        eprintln!("necklace: warning: {w}");
+        eprintln!("necklace: warning: {}", printable(w));
+    }
+}
+
+/// Print what was done to an input file, one line each.
+fn note(path: &std::path::Path, notes: &[String]) {
+    for n in notes {
+        eprintln!("necklace: note: {}: {}", path.display(), printable(n));
     }
 }
 
@@ -703,6 +771,8 @@ fn render(
     output: PathBuf,
     options: &RenderOptions,
 ) -> Result<String> {
+    necklace::render::check_png_name(&output)?;
+    check_output_file(&output)?;
     let surface = io::read_mesh(&mesh)?;
     let curves = match &loops {
         Some(path) => necklace::output::read_loops_json(path)?,
@@ -712,6 +782,7 @@ fn render(
         Some(path) => necklace::output::read_points_json(path)?,
         None => Vec::new(),
     };
+    necklace::output::check_overlay(&surface, &curves, &saddles)?;
     let scene = necklace::output::loop_scene(&surface, &curves, &saddles);
     let rendered = necklace::render::render(&scene, options)?;
     rendered.image.write_png(&output)?;
@@ -726,21 +797,15 @@ fn render(
     ))
 }
 
-/// Read a mesh and orient it for volume meshing, warning about what is unusual.
-pub fn read_for_volume(path: &PathBuf) -> Result<(necklace::SurfaceMesh, MeshReport)> {
-    let (surface, surface_report, flipped) = pipeline::orient_for_volume(io::read_mesh(path)?);
-    // The mesher follows the winding number, so open or self-intersecting input is
-    // meshed as the solid it bounds; say what is unusual about it.
-    for problem in surface_report.problems() {
-        eprintln!("necklace: warning: {}: {problem}", path.display());
+/// Read a mesh and prepare it for the method (`pipeline::prepare_input`), printing
+/// what was repaired and what is unusual about it.
+pub fn read_prepared(path: &std::path::Path) -> Result<necklace::SurfaceMesh> {
+    let prepared = pipeline::prepare_input(io::read_mesh(path)?).map_err(|e| e.in_file(path))?;
+    note(path, &prepared.notes);
+    for w in &prepared.warnings {
+        eprintln!("necklace: warning: {}: {}", path.display(), printable(w));
     }
-    if flipped {
-        eprintln!(
-            "necklace: note: {}: faces flipped to point outward",
-            path.display()
-        );
-    }
-    Ok((surface, surface_report))
+    Ok(prepared.mesh)
 }
 
 fn volume(
@@ -750,7 +815,11 @@ fn volume(
     output: Option<PathBuf>,
     json: bool,
 ) -> Result<String> {
-    let (surface, _) = read_for_volume(&path)?;
+    if let Some(output) = &output {
+        io::check_tet_mesh_name(output)?;
+        check_output_file(output)?;
+    }
+    let surface = read_prepared(&path)?;
     let side = if exterior {
         Side::Outside
     } else {
@@ -812,6 +881,8 @@ fn volume(
 }
 
 fn shape(name: &str, params: &[(String, f64)], output: PathBuf) -> Result<String> {
+    io::check_mesh_name(&output)?;
+    check_output_file(&output)?;
     let shape = Shape::from_name(name, params)?;
     let mesh = shape.mesh()?;
     io::write_mesh(&output, &mesh)?;

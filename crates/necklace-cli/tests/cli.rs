@@ -3,6 +3,10 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+/// Careless and hostile input.
+#[path = "cli/hostile.rs"]
+mod hostile;
+
 fn necklace(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_necklace"))
         .args(args)

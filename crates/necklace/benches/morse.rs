@@ -7,7 +7,7 @@
 
 use necklace::io;
 use necklace::morse::MorseOptions;
-use necklace::pipeline::{critical_points, orient_for_volume, volume_mesh, Side, VolumeOptions};
+use necklace::pipeline::{critical_points, volume_mesh, Side, VolumeOptions};
 
 mod common;
 
@@ -21,7 +21,10 @@ fn main() {
     );
     println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---|");
     for file in &files {
-        let (surface, _, _) = orient_for_volume(io::read_mesh(file).expect("readable mesh"));
+        let surface =
+            necklace::pipeline::prepare_input(io::read_mesh(file).expect("readable mesh"))
+                .expect("a usable mesh")
+                .mesh;
         for side in [Side::Inside, Side::Outside] {
             let volume = volume_mesh(&surface, side, &VolumeOptions::default()).expect("meshing");
             let r = critical_points(&surface, &volume, &MorseOptions::default()).expect("morse");

@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-use necklace::pipeline::{orient_for_volume, volume_mesh, Side, VolumeOptions, VolumeResult};
+use necklace::pipeline::{volume_mesh, Side, VolumeOptions, VolumeResult};
 use necklace::{io, SurfaceMesh};
 
 fn run(surface: &SurfaceMesh, side: Side, h: Option<f64>) -> (VolumeResult, f64) {
@@ -32,7 +32,10 @@ fn main() {
     println!("|---|---|---:|---:|---|---|---:|---:|---:|---:|---:|---:|");
     let (mut all_tets, mut all_seconds) = (0usize, 0.0);
     for file in &files {
-        let (surface, _, _) = orient_for_volume(io::read_mesh(file).expect("readable mesh"));
+        let surface =
+            necklace::pipeline::prepare_input(io::read_mesh(file).expect("readable mesh"))
+                .expect("a usable mesh")
+                .mesh;
         for side in [Side::Inside, Side::Outside] {
             let (v, s) = run(&surface, side, None);
             let r = v.report();
@@ -66,7 +69,9 @@ fn main() {
 
     let model = files.iter().find(|f| f.ends_with("bunny.off"));
     if let Some(mesh) = model.and_then(|m| io::read_mesh(m).ok()) {
-        let (surface, _, _) = orient_for_volume(mesh);
+        let surface = necklace::pipeline::prepare_input(mesh)
+            .expect("a usable mesh")
+            .mesh;
         let diagonal = surface.bbox_diagonal();
         println!("\nseries on bunny.off (outside shell):");
         println!("| h | vertices | tets | seconds | microseconds per tet |");

@@ -62,9 +62,9 @@ pub type Result<T> = std::result::Result<T, Error>;
 impl Error {
     /// A new error with a kind and a message, without source or location.
     pub fn new(kind: ErrorKind, message: impl Into<String>) -> Self {
-        let message: String = message.into();
-        // Keep the one-line promise even if a message was built from input text.
-        let message = message.replace(['\n', '\r'], " ");
+        // Keep the one-line promise even if a message was built from input text, and
+        // never pass a terminal escape from a file through to the user's terminal.
+        let message = printable(&message.into());
         Error {
             kind,
             source: None,
@@ -93,7 +93,7 @@ impl Error {
     /// Attach the source name (usually the file path) unless one is already set.
     pub fn in_source(mut self, source: impl Into<String>) -> Self {
         if self.source.is_none() {
-            self.source = Some(source.into());
+            self.source = Some(printable(&source.into()));
         }
         self
     }
@@ -146,6 +146,59 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
+/// Numbers in messages longer than this many digits are rewritten in scientific notation.
+/// (`{}` writes an `f64` with up to 17 significant digits, but writes 1e-300 or 1e300
+/// out in full.)
+const MAX_DIGITS: usize = 24;
+
+/// `text` with numbers of more than [`MAX_DIGITS`] digits written in scientific
+/// notation, so that no message holds a 300-digit number.
+fn compact_numbers(text: &str) -> String {
+    let bytes = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let start = i;
+        while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.') {
+            i += 1;
+        }
+        if i == start {
+            let c = text[i..].chars().next().unwrap_or(' ');
+            out.push(c);
+            i += c.len_utf8();
+            continue;
+        }
+        let run = &text[start..i];
+        let digits = run.bytes().filter(u8::is_ascii_digit).count();
+        match run.parse::<f64>() {
+            Ok(x) if digits > MAX_DIGITS => out.push_str(&format!("{x:.6e}")),
+            _ => out.push_str(run),
+        }
+    }
+    out
+}
+
+/// `text` with every character that is not printable written as an escape: control
+/// characters (terminal escapes, line ends, tabs) as `\x1b`, and invisible format
+/// characters (a byte-order mark, bidirectional overrides, zero-width spaces) as
+/// `\u{feff}`, so that a message quoting input stays one visible line.
+pub fn printable(text: &str) -> String {
+    use std::fmt::Write as _;
+    let invisible = |c: char| matches!(c, '\u{200b}'..='\u{200f}' | '\u{2028}'..='\u{202e}' | '\u{2060}'..='\u{206f}' | '\u{feff}');
+    let text = compact_numbers(text);
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() && (c as u32) < 0x100 {
+            let _ = write!(out, "\\x{:02x}", c as u32);
+        } else if c.is_control() || invisible(c) {
+            let _ = write!(out, "\\u{{{:x}}}", c as u32);
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -155,8 +208,22 @@ mod tests {
         let e = Error::new(ErrorKind::Syntax, "bad\ntoken")
             .at_line(7)
             .in_source("a.obj");
-        assert_eq!(e.to_string(), "a.obj: line 7: bad token");
+        assert_eq!(e.to_string(), "a.obj: line 7: bad\\x0atoken");
         let e = Error::new(ErrorKind::Truncated, "ends early").at_byte(84);
         assert_eq!(e.to_string(), "byte 84: ends early");
+    }
+
+    #[test]
+    fn escapes_and_invisible_characters_are_quoted() {
+        let e = Error::new(
+            ErrorKind::Syntax,
+            "found '\u{1b}[2J\u{1b}]0;x\u{7}' \u{feff}v",
+        );
+        assert_eq!(e.to_string(), "found '\\x1b[2J\\x1b]0;x\\x07' \\u{feff}v");
+        assert_eq!(printable("Genus 2, 1.5 mm, é"), "Genus 2, 1.5 mm, é");
+        let tiny = format!("h = {} must be positive", 1e-300);
+        assert_eq!(printable(&tiny), "h = 1.000000e-300 must be positive");
+        let e = Error::invalid_argument(format!("h = {}, or {}", 1e300, 0.1 + 0.2));
+        assert_eq!(e.to_string(), "h = 1.000000e300, or 0.30000000000000004");
     }
 }

@@ -54,6 +54,7 @@
 
 pub mod distance;
 pub mod error;
+pub mod file;
 mod geom;
 pub mod io;
 pub mod loops;

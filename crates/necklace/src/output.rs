@@ -127,6 +127,53 @@ pub fn membranes(report: &NeckReport) -> (SurfaceMesh, Vec<i32>) {
     (mesh, labels)
 }
 
+/// Check that loops and saddles read from files belong to `surface`: every loop has at
+/// least three points, and every point lies within one bounding-box diagonal of the
+/// surface's box (farther, the picture would frame the stray points and the surface
+/// would shrink to a dot: most likely the file of another mesh).
+pub fn check_overlay(
+    surface: &SurfaceMesh,
+    loops: &[LoopCurve],
+    saddles: &[[f64; 3]],
+) -> Result<()> {
+    let (lo, hi) = surface
+        .bounding_box()
+        .ok_or_else(|| Error::new(ErrorKind::InvalidMesh, "the surface has no vertices"))?;
+    let diagonal = surface.bbox_diagonal();
+    let away = |p: &[f64; 3]| {
+        let d: f64 = (0..3)
+            .map(|k| (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        d / diagonal.max(f64::MIN_POSITIVE)
+    };
+    for (i, l) in loops.iter().enumerate() {
+        if l.points.len() < 3 {
+            return Err(Error::invalid_argument(format!(
+                "loop {i} has {} points: a closed loop needs at least 3",
+                l.points.len()
+            )));
+        }
+        let far = l.points.iter().map(away).fold(0.0, f64::max);
+        if far > 1.0 {
+            return Err(Error::invalid_argument(format!(
+                "loop {i} reaches {far:.3e} bounding-box diagonals outside the mesh: are these the loops of another mesh?"
+            )));
+        }
+    }
+    if let Some((i, far)) = saddles
+        .iter()
+        .map(away)
+        .enumerate()
+        .find(|&(_, far)| far > 1.0)
+    {
+        return Err(Error::invalid_argument(format!(
+            "saddle {i} lies {far:.3e} bounding-box diagonals outside the mesh: are these the saddles of another mesh?"
+        )));
+    }
+    Ok(())
+}
+
 /// The picture's scene: the surface, each loop in its kind's colour labelled by its
 /// index, `saddles` as dots, and a legend of the kinds present.
 pub fn loop_scene<'a>(
@@ -164,8 +211,7 @@ pub fn loop_scene<'a>(
 }
 
 fn write_text(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text)
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+    crate::file::write_atomic(path, text.as_bytes())
 }
 
 /// Write a run's files into `dir` (created if missing); returns the paths written.
@@ -176,9 +222,7 @@ pub fn write_run(
     options: &OutputOptions,
     input: Option<&Path>,
 ) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| {
-        Error::new(ErrorKind::Io, format!("cannot create the folder: {e}")).in_file(dir)
-    })?;
+    crate::file::check_output_folder(dir)?;
     let mut written = Vec::new();
     let curves = loop_curves(report);
 

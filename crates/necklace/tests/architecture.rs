@@ -5,7 +5,7 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
-const DATA: &[&str] = &["error", "geom", "mesh", "tet", "progress"];
+const DATA: &[&str] = &["error", "file", "geom", "mesh", "tet", "progress"];
 /// Shared queries over data that several stages need (imports data only).
 const SERVICES: &[&str] = &["distance"];
 /// Modules that may import everything; no other module imports them.

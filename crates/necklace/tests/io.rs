@@ -149,6 +149,42 @@ fn obj_slash_forms() {
 }
 
 #[test]
+fn a_large_polygon_becomes_a_valid_triangulation_with_no_high_valence_corner() {
+    // A convex 1000-gon: n − 2 triangles that tile it (their areas sum to the
+    // polygon's, each one positively oriented), no corner in more than 2 log2(n) + 2.
+    let n = 1000usize;
+    let mut data = String::new();
+    for i in 0..n {
+        let a = std::f64::consts::TAU * i as f64 / n as f64;
+        data += &format!("v {} {} 0\n", a.cos(), a.sin());
+    }
+    data += "f";
+    for i in 1..=n {
+        data += &format!(" {i}");
+    }
+    let mesh = read(&data, Format::Obj);
+    assert_eq!(mesh.triangles.len(), n - 2);
+    let mut area = 0.0;
+    let mut valence = vec![0usize; n];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+        let twice = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        assert!(twice > 0.0, "{t:?} is not counter-clockwise");
+        area += 0.5 * twice;
+        for &v in t {
+            valence[v as usize] += 1;
+        }
+    }
+    let polygon = 0.5 * n as f64 * (std::f64::consts::TAU / n as f64).sin();
+    assert!((area - polygon).abs() < 1e-9, "{area} vs {polygon}");
+    assert!(
+        valence.iter().all(|&k| k <= 2 * 10 + 2),
+        "{:?}",
+        valence.iter().max()
+    );
+}
+
+#[test]
 fn obj_negative_indices_are_relative() {
     let data =
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -1 -2\nv 0 0 1\nf -4 -3 -1\nf 1 -1 -2\nf -3 -2 -1\n";
@@ -156,13 +192,15 @@ fn obj_negative_indices_are_relative() {
 }
 
 #[test]
-fn obj_polygons_are_fan_split() {
+fn obj_quads_are_fan_split_and_larger_polygons_halved() {
     let data = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv -1 0.5 0\nf 1 2 3 4\nf 1 4 5 2/1 3//2\n";
     let mesh = read(data, Format::Obj);
     assert_eq!(mesh.positions.len(), 5);
+    // The pentagon (0 3 4 1 2): the triangle on its first, middle and last corners,
+    // then each half's arc.
     assert_eq!(
         mesh.triangles,
-        vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1], [0, 1, 2]]
+        vec![[0, 1, 2], [0, 2, 3], [0, 4, 2], [0, 3, 4], [4, 1, 2]]
     );
 }
 
@@ -284,12 +322,12 @@ fn off_variants_with_extra_columns() {
 }
 
 #[test]
-fn off_polygons_are_fan_split() {
+fn off_quads_are_fan_split_and_larger_polygons_halved() {
     let data = "OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n-1 0.5 0\n4 0 1 2 3\n5 0 3 4 1 2\n";
     let mesh = read(data, Format::Off);
     assert_eq!(
         mesh.triangles,
-        vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1], [0, 1, 2]]
+        vec![[0, 1, 2], [0, 2, 3], [0, 4, 2], [0, 3, 4], [4, 1, 2]]
     );
     assert_eq!(mesh.positions[4], [-1.0, 0.5, 0.0]);
 }

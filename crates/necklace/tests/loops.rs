@@ -898,7 +898,9 @@ fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
     let mut total = 0;
     for file in files {
         let mesh = necklace::io::read_mesh(&file).unwrap();
-        let (mesh, _, _) = necklace::pipeline::orient_for_volume(mesh);
+        let mesh = necklace::pipeline::prepare_input(mesh)
+            .expect("a usable mesh")
+            .mesh;
         // Both sides of every model, the wire sphere's shell too (1.4M tets, about two
         // minutes and 3 GB).
         let r = find_necks(&mesh, &NeckOptions::default()).unwrap();
@@ -1018,7 +1020,9 @@ fn the_kitten_and_the_botijo_split_in_four_have_the_same_necks() {
             return;
         }
         let mesh = necklace::io::read_mesh(&file).unwrap();
-        let (mesh, _, _) = necklace::pipeline::orient_for_volume(mesh);
+        let mesh = necklace::pipeline::prepare_input(mesh)
+            .expect("a usable mesh")
+            .mesh;
         let fine = common::split_in_four(&mesh);
         assert_eq!(fine.triangles.len(), 4 * mesh.triangles.len());
         let (coarse, fine) = (

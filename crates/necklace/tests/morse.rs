@@ -516,7 +516,9 @@ fn around_a_trefoil_knot_one_cycle_is_essential_and_the_others_are_filled() {
         return;
     }
     let surface = necklace::io::read_mesh(&file).unwrap();
-    let (surface, _, _) = necklace::pipeline::orient_for_volume(surface);
+    let surface = necklace::pipeline::prepare_input(surface)
+        .expect("a usable mesh")
+        .mesh;
     let volume = volume_mesh(&surface, Side::Outside, &VolumeOptions::default()).unwrap();
     let r = critical_points(&surface, &volume, &MorseOptions::default()).unwrap();
     assert_eq!(r.cycle_rank, 1);

@@ -143,7 +143,8 @@ fn every_shared_mesh_meshes_with_its_topology_and_angles_and_passes_the_morse_ch
     };
     for file in files {
         let surface = io::read_mesh(&file).unwrap();
-        let (surface, surface_report, _) = necklace::pipeline::orient_for_volume(surface);
+        let prepared = necklace::pipeline::prepare_input(surface).unwrap();
+        let (surface, surface_report) = (prepared.mesh, prepared.report);
         for side in [Side::Inside, Side::Outside] {
             let v = volume_mesh(&surface, side, &VolumeOptions::default()).unwrap();
             let r = v.report();

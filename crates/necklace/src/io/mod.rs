@@ -10,7 +10,8 @@
 //! be trusted for allocation: memory is reserved only as far as the remaining bytes can
 //! hold the records a header announces (a hostile "4 billion faces" costs nothing).
 //!
-//! Conventions: polygons are fan-split into triangles (v0, vi, vi+1); vertex order and
+//! Conventions: polygons are split into triangles in linear time (a fan up to quads,
+//! halving beyond: `text::triangulate`); vertex order and
 //! face order are kept as in the file, so writing and reading back gives the same mesh
 //! (STL has no shared vertices: coincident corners are welded exactly, in order of first
 //! appearance).
@@ -63,8 +64,32 @@ impl Format {
         }
     }
 
+    /// The format a file's content proves, whatever its name: PLY's `ply` magic line,
+    /// an OFF header keyword on the first line, or a binary STL whose size matches its
+    /// triangle count. `None` when the content proves nothing (OBJ and ascii STL have no
+    /// signature).
+    pub fn signature(data: &[u8]) -> Option<Format> {
+        let data = skip_bom(data);
+        let first = data
+            .split(|&b| b == b'\n' || b == b'\r')
+            .next()
+            .unwrap_or(b"")
+            .trim_ascii();
+        let keyword = first.split(u8::is_ascii_whitespace).next().unwrap_or(b"");
+        if first == b"ply" {
+            Some(Format::Ply)
+        } else if keyword.ends_with(b"OFF") && keyword.len() <= 6 {
+            Some(Format::Off)
+        } else if stl::looks_like_binary_stl(data) && !data.starts_with(b"solid") {
+            Some(Format::Stl)
+        } else {
+            None
+        }
+    }
+
     /// Guess the format from the first bytes of a file.
     pub fn sniff(data: &[u8]) -> Option<Format> {
+        let data = skip_bom(data);
         let head = &data[..data.len().min(512)];
         let text = String::from_utf8_lossy(head);
         let first = text
@@ -122,13 +147,29 @@ pub fn mesh_files(dir: impl AsRef<Path>) -> Result<Vec<std::path::PathBuf>> {
 }
 
 /// Read a mesh file. The format comes from the extension, or from the content when the
-/// extension is missing or unknown. Errors name the file.
+/// extension is missing or unknown; a file whose content is unmistakably another format
+/// (a PLY or OFF header, a binary STL's size) than its extension says is refused with
+/// both named. Only regular files are read (not a FIFO, a device or a folder). Errors
+/// name the file.
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<SurfaceMesh> {
     let path = path.as_ref();
-    let data = std::fs::read(path)
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot read: {e}")).in_file(path))?;
+    let data = read_file(path)?;
     let format = match Format::from_extension(path) {
-        Some(f) => f,
+        Some(named) => {
+            if let Some(actual) = Format::signature(&data).filter(|&f| f != named) {
+                return Err(Error::new(
+                    ErrorKind::UnknownFormat,
+                    format!(
+                        "the name says {} but the content is {}: rename the file to .{}",
+                        named.name().to_uppercase(),
+                        actual.name().to_uppercase(),
+                        actual.name()
+                    ),
+                )
+                .in_file(path));
+            }
+            named
+        }
         None => Format::sniff(&data).ok_or_else(|| {
             Error::new(
                 ErrorKind::UnknownFormat,
@@ -140,8 +181,10 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<SurfaceMesh> {
     read_mesh_bytes(&data, format).map_err(|e| e.in_file(path))
 }
 
-/// Read a mesh from bytes in a known format.
+/// Read a mesh from bytes in a known format. A leading UTF-8 byte-order mark is
+/// skipped.
 pub fn read_mesh_bytes(data: &[u8], format: Format) -> Result<SurfaceMesh> {
+    let data = skip_bom(data);
     if data.iter().all(u8::is_ascii_whitespace) {
         return Err(Error::new(ErrorKind::Empty, "empty file"));
     }
@@ -151,6 +194,12 @@ pub fn read_mesh_bytes(data: &[u8], format: Format) -> Result<SurfaceMesh> {
         Format::Ply => ply::read(data),
         Format::Stl => stl::read(data),
     }
+}
+
+/// `data` without a leading UTF-8 byte-order mark (some editors write one; it is not
+/// part of the first line).
+fn skip_bom(data: &[u8]) -> &[u8] {
+    data.strip_prefix(b"\xef\xbb\xbf").unwrap_or(data)
 }
 
 /// Points with per-point scalar fields and optional colours (critical points, saddles),
@@ -165,16 +214,54 @@ pub struct PointCloud {
     pub colors: Option<Vec<[u8; 3]>>,
 }
 
-/// Write a point cloud as binary little-endian PLY (the extension must be `.ply`).
-pub fn write_point_cloud(path: impl AsRef<Path>, points: &PointCloud) -> Result<()> {
-    let path = path.as_ref();
-    if Format::from_extension(path) != Some(Format::Ply) {
-        return Err(Error::new(
+/// Check, before any work, that [`write_point_cloud`] takes this name (`.ply`).
+pub fn check_point_cloud_name(path: &Path) -> Result<()> {
+    if Format::from_extension(path) == Some(Format::Ply) {
+        Ok(())
+    } else {
+        Err(Error::new(
             ErrorKind::UnknownFormat,
             "point clouds are written as PLY: use a .ply file name",
         )
-        .in_file(path));
+        .in_file(path))
     }
+}
+
+/// Check, before any work, that [`write_mesh`] takes this name (`.obj`, `.off`,
+/// `.ply`).
+pub fn check_mesh_name(path: &Path) -> Result<()> {
+    match Format::from_extension(path) {
+        Some(Format::Obj | Format::Off | Format::Ply) => Ok(()),
+        Some(Format::Stl) => Err(Error::new(
+            ErrorKind::Unsupported,
+            "writing STL is not supported (it has no shared vertices); use .obj, .off or .ply",
+        )
+        .in_file(path)),
+        None => Err(Error::new(
+            ErrorKind::UnknownFormat,
+            "cannot tell the output format: use .obj, .off or .ply",
+        )
+        .in_file(path)),
+    }
+}
+
+/// Check, before any work, that [`write_tet_mesh`] takes this name (`.vtu`, `.mesh`,
+/// `.msh`, `.node`).
+pub fn check_tet_mesh_name(path: &Path) -> Result<()> {
+    match TetFormat::from_extension(path) {
+        Some(_) => Ok(()),
+        None => Err(Error::new(
+            ErrorKind::UnknownFormat,
+            "unknown tet mesh format (use .vtu, .mesh, .msh or .node)",
+        )
+        .in_file(path)),
+    }
+}
+
+/// Write a point cloud as binary little-endian PLY (the extension must be `.ply`).
+pub fn write_point_cloud(path: impl AsRef<Path>, points: &PointCloud) -> Result<()> {
+    let path = path.as_ref();
+    check_point_cloud_name(path)?;
     let n = points.positions.len();
     let bad_name = |name: &str| name.is_empty() || name.contains(char::is_whitespace);
     if let Some((name, values)) = points
@@ -192,8 +279,7 @@ pub fn write_point_cloud(path: impl AsRef<Path>, points: &PointCloud) -> Result<
     }
     let mut out = Vec::new();
     ply::write_points(points, &mut out);
-    std::fs::write(path, out)
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+    crate::file::write_atomic(path, &out)
 }
 
 /// Write closed polylines as OBJ: their points as `v` lines and each polyline as one
@@ -212,8 +298,7 @@ pub fn write_polylines(
         )
         .in_file(path));
     }
-    std::fs::write(path, polylines_obj(polylines, names))
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+    crate::file::write_atomic(path, polylines_obj(polylines, names).as_bytes())
 }
 
 /// Write closed polylines as binary PLY with an `edge` element: every vertex and edge
@@ -241,8 +326,7 @@ pub fn write_polylines_ply(
     }
     let mut out = Vec::new();
     ply::write_polylines(polylines, colors, &mut out);
-    std::fs::write(path, out)
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+    crate::file::write_atomic(path, &out)
 }
 
 /// Write a triangle mesh as binary PLY whose faces carry the `int` property `name`
@@ -270,8 +354,7 @@ pub fn write_labelled_mesh_ply(
     }
     let mut out = Vec::new();
     ply::write_labelled(mesh, name, labels, &mut out);
-    std::fs::write(path, out)
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+    crate::file::write_atomic(path, &out)
 }
 
 /// The OBJ text of [`write_polylines`].
@@ -309,8 +392,7 @@ pub fn write_mesh(path: impl AsRef<Path>, mesh: &SurfaceMesh) -> Result<()> {
         .in_file(path)
     })?;
     let bytes = write_mesh_bytes(mesh, format).map_err(|e| e.in_file(path))?;
-    std::fs::write(path, bytes)
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+    crate::file::write_atomic(path, &bytes)
 }
 
 /// Encode a mesh in a format (OBJ, OFF or binary little-endian PLY).
@@ -395,6 +477,7 @@ pub fn read_tet_mesh(path: impl AsRef<Path>) -> Result<TetMesh> {
 /// TetGen needs two files: use [`read_tetgen_bytes`] ([`ErrorKind::InvalidArgument`]
 /// here).
 pub fn read_tet_mesh_bytes(data: &[u8], format: TetFormat) -> Result<TetMesh> {
+    let data = skip_bom(data);
     if data.iter().all(u8::is_ascii_whitespace) {
         return Err(Error::new(ErrorKind::Empty, "empty file"));
     }
@@ -472,14 +555,29 @@ pub fn write_tetgen_bytes(mesh: &TetMesh) -> Result<(Vec<u8>, Vec<u8>)> {
     Ok(tetgen::write(mesh))
 }
 
+/// The bytes of a regular file. Anything else is refused before reading: a FIFO
+/// would block forever and a device such as `/dev/zero` never ends.
 fn read_file(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path)
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot read: {e}")).in_file(path))
+    let io_error =
+        |e: std::io::Error| Error::new(ErrorKind::Io, format!("cannot read: {e}")).in_file(path);
+    let metadata = std::fs::metadata(path).map_err(io_error)?;
+    if !metadata.is_file() {
+        let what = if metadata.is_dir() {
+            "a folder"
+        } else {
+            "not a regular file (a pipe, socket or device)"
+        };
+        return Err(Error::new(
+            ErrorKind::Io,
+            format!("cannot read: {what}; give the path of a mesh file"),
+        )
+        .in_file(path));
+    }
+    std::fs::read(path).map_err(io_error)
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
-    std::fs::write(path, bytes)
-        .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+    crate::file::write_atomic(path, bytes)
 }
 
 /// Check what the writers index by: one kind per vertex, tet corners in range (the

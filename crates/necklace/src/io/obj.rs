@@ -7,7 +7,7 @@
 //!   Indices are 1-based; negative indices are relative (-1 is the last vertex defined
 //!   so far); 0 is an error. Positive indices may point to vertices defined later in
 //!   the file: they are checked once the whole file is read, and an error still names
-//!   the face's line. Polygons are fan-split into triangles.
+//!   the face's line. Polygons are split into triangles (fans up to quads).
 //! - Every other statement (`vt`, `vn`, `o`, `g`, `s`, `usemtl`, `mtllib`, `l`, `p`, ...)
 //!   is ignored, as are `#` comments, blank lines, CRLF endings and tabs. A line ending
 //!   in `\` continues on the next line.
@@ -94,7 +94,7 @@ impl Reader {
                 self.forward.push((line, largest));
             }
         }
-        text::fan_split(&self.polygon, &mut self.triangles);
+        text::triangulate(&self.polygon, &mut self.triangles);
         Ok(())
     }
 

@@ -8,7 +8,7 @@
 //! - `nv` vertex records: at least 3 numbers, further columns (colours, normals,
 //!   texture coordinates) are ignored;
 //! - `nf` face records `n i1 .. in [colour ...]` with 0-based indices; polygons are
-//!   fan-split into triangles, trailing colour values are ignored.
+//!   split into triangles (fans up to quads), trailing colour values are ignored.
 //!
 //! `#` comments (to the end of a line), blank lines, CRLF endings and a last line without
 //! a newline are accepted anywhere; non-empty lines after the declared records are
@@ -64,7 +64,7 @@ pub(crate) fn read(data: &[u8]) -> Result<SurfaceMesh> {
             .next()
             .ok_or_else(|| truncated(face_count, "faces", found, end))?;
         parse_face(record, line, vertex_count, &mut polygon)?;
-        text::fan_split(&polygon, &mut triangles);
+        text::triangulate(&polygon, &mut triangles);
     }
     if triangles.is_empty() {
         return Err(Error::new(ErrorKind::Empty, "no faces").at_line(end));

@@ -11,7 +11,7 @@
 //! - Element `vertex` needs scalar properties `x`, `y`, `z` of any type; element `face`
 //!   needs an integer list property `vertex_indices` (or `vertex_index`). Every other
 //!   property (scalar or list, in any order) and every other element (before, between or
-//!   after these two) is read and skipped. Faces are fan-split into triangles.
+//!   after these two) is read and skipped. Faces are split into triangles (fans up to quads).
 //! - Ascii data is one record per non-blank line; a record with too few or too many
 //!   values is an error.
 //!
@@ -394,7 +394,7 @@ fn read_elements(
                         let n = list_length(source, count)?;
                         if e == layout.face_element && p == layout.face_list {
                             read_face(source, item, n, layout.vertex_count, &mut polygon)?;
-                            text::fan_split(&polygon, &mut triangles);
+                            text::triangulate(&polygon, &mut triangles);
                         } else {
                             source.skip(item, n)?;
                         }

@@ -12,7 +12,7 @@
 //!   `vertex x y z` ... / `endloop` / `endfacet`, then `endsolid [name]`; several solids
 //!   may follow each other. Keywords are case-insensitive, any whitespace and CRLF are
 //!   accepted, names are optional, normals are not checked, and a loop of more than 3
-//!   vertices is fan-split.
+//!   vertices is split into triangles.
 //!
 //! STL stores every triangle's corners separately: corners with exactly the same
 //! coordinates (same `f64` bits, after turning -0.0 into 0.0) are welded into one vertex,
@@ -166,7 +166,7 @@ fn read_ascii(data: &[u8]) -> Result<SurfaceMesh> {
                 return Err(unexpected("'facet' or 'endsolid'", word, line));
             }
             facet(&mut tokens, end, &mut welder, &mut polygon)?;
-            text::fan_split(&polygon, &mut triangles);
+            text::triangulate(&polygon, &mut triangles);
         }
     }
     welder.finish(triangles)

@@ -1,27 +1,37 @@
 //! Helpers shared by the readers: numbered lines and tokens of text formats (OBJ, OFF,
-//! ascii PLY, ascii STL), number parsing whose errors name the line, and the fan split
+//! ascii PLY, ascii STL), number parsing whose errors name the line, and the triangulation
 //! of polygons into triangles.
 //!
-//! Everything works on bytes: a line is split at `\n` with one trailing `\r` dropped,
+//! Everything works on bytes: a line ends at `\n`, `\r\n` or a lone `\r` (old Mac files),
 //! tokens are separated by ASCII whitespace (spaces, tabs), and a token that is not
 //! UTF-8 or not a number is a [`ErrorKind::Syntax`] error, never a panic.
 
 use crate::error::{Error, ErrorKind, Result};
 
-/// The lines of `data` with their 1-based numbers, without the `\n` or `\r\n` ending.
+/// The lines of `data` with their 1-based numbers, without their `\n`, `\r\n` or `\r`
+/// ending.
 pub(crate) fn raw_lines(data: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
-    data.split_inclusive(|&b| b == b'\n')
-        .enumerate()
-        .map(|(i, line)| {
-            let line = line.strip_suffix(b"\n").unwrap_or(line);
-            (i + 1, line.strip_suffix(b"\r").unwrap_or(line))
-        })
+    let mut rest = data;
+    let mut number = 0;
+    std::iter::from_fn(move || {
+        if rest.is_empty() {
+            return None;
+        }
+        number += 1;
+        let (line, next) = match rest.iter().position(|&b| b == b'\n' || b == b'\r') {
+            Some(i) if rest[i] == b'\r' && rest.get(i + 1) == Some(&b'\n') => (&rest[..i], i + 2),
+            Some(i) => (&rest[..i], i + 1),
+            None => (rest, rest.len()),
+        };
+        rest = &rest[next..];
+        Some((number, line))
+    })
 }
 
 /// The number of the last line of `data` (0 for no data): where "file ends early"
 /// errors point.
 pub(crate) fn last_line(data: &[u8]) -> usize {
-    data.split_inclusive(|&b| b == b'\n').count()
+    raw_lines(data).count()
 }
 
 /// Cut a `#` comment off a line.
@@ -47,10 +57,11 @@ pub(crate) fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
         .filter(|token| !token.is_empty())
 }
 
-/// A token quoted for a message, shortened if long.
+/// A token quoted for a message, shortened if long; bytes that are not printable text
+/// (control characters such as a terminal escape, invalid UTF-8) are written as `\x1b`.
 pub(crate) fn shown(token: &[u8]) -> String {
     const MAX: usize = 24;
-    let text = String::from_utf8_lossy(token);
+    let text = crate::error::printable(&String::from_utf8_lossy(token));
     if text.chars().count() > MAX {
         let short: String = text.chars().take(MAX).collect();
         format!("'{short}...'")
@@ -120,10 +131,33 @@ pub(crate) fn parse_int(token: &[u8], what: &str, line: usize) -> Result<i64> {
         })
 }
 
-/// Append the fan triangulation (v0, v1, v2), (v0, v2, v3), ... of a polygon.
-pub(crate) fn fan_split(polygon: &[u32], triangles: &mut Vec<[u32; 3]>) {
-    if let Some((&first, rest)) = polygon.split_first() {
-        triangles.extend(rest.windows(2).map(|pair| [first, pair[0], pair[1]]));
+/// Append a triangulation of a polygon, in time linear in its corners. A triangle or
+/// quad is split as a fan from its first corner, (v0, v1, v2), (v0, v2, v3), as every
+/// tool does. A larger polygon is split by halving: the triangle (v0, vm, vn) on the
+/// middle corner, then each half's arc the same way, so that no corner gets more than
+/// about 2 log2(n) triangles. (A fan of an n-gon puts n − 2 slivers on one corner,
+/// which makes spatial queries round that corner quadratic.) For a convex polygon both
+/// are valid triangulations.
+pub(crate) fn triangulate(polygon: &[u32], triangles: &mut Vec<[u32; 3]>) {
+    if polygon.len() <= 4 {
+        if let Some((&first, rest)) = polygon.split_first() {
+            triangles.extend(rest.windows(2).map(|pair| [first, pair[0], pair[1]]));
+        }
+        return;
+    }
+    // The polygon is cut into the triangle on corners 0, m, n-1 plus the two arcs
+    // 0..=m and m..=n-1, closed by their chords; arcs are split at their middle in
+    // turn (an explicit stack: no recursion depth to worry about).
+    let n = polygon.len();
+    let mut arcs = vec![(0usize, n - 1)];
+    while let Some((a, b)) = arcs.pop() {
+        if b - a < 2 {
+            continue;
+        }
+        let m = a + (b - a) / 2;
+        triangles.push([polygon[a], polygon[m], polygon[b]]);
+        arcs.push((m, b));
+        arcs.push((a, m));
     }
 }
 

@@ -68,18 +68,12 @@ impl HomologyBasis {
             queue.push_back(root);
             while let Some(f) = queue.pop_front() {
                 for side in 0..3 {
-                    let Some(e) = topology.face_edge(f, side) else {
+                    let Some((g, e)) = topology.across(f, side) else {
                         continue;
                     };
-                    let faces = topology.edge_faces(e);
-                    if in_tree[e] || faces.len() != 2 {
+                    if in_tree[e] {
                         continue;
                     }
-                    let g = if faces[0] as usize == f {
-                        faces[1]
-                    } else {
-                        faces[0]
-                    } as usize;
                     if !seen[g] {
                         seen[g] = true;
                         in_cotree[e] = true;

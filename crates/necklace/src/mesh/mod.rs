@@ -22,11 +22,13 @@
 //! - The signed volume (divergence theorem) is positive for an outward-oriented closed mesh.
 
 mod homology;
+mod repair;
 mod report;
 mod topology;
 
 pub use homology::{z2_rank, HomologyBasis, Z2Basis};
-pub use report::{ComponentReport, MeshReport};
+pub use repair::{orient_consistently, remove_unreferenced, Reorientation};
+pub use report::{ComponentReport, MeshReport, MAX_COORDINATE};
 pub use topology::Topology;
 pub(crate) use topology::{find, union};
 

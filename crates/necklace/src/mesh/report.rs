@@ -13,6 +13,13 @@ use crate::geom::{cross, dot, norm, sub};
 /// side (2A ≤ ε·L²).
 const ZERO_AREA_RELATIVE: f64 = 1e-12;
 
+/// The largest absolute coordinate the method accepts: a volume is a product of three
+/// coordinates, which overflows `f64` (1.8e308) not far above 1e100.
+pub const MAX_COORDINATE: f64 = 1e100;
+
+/// A closed mesh is flat when |signed volume| ≤ this × (bounding-box diagonal)³.
+const FLAT_RELATIVE: f64 = 1e-12;
+
 /// Counts, validity flags and genus of a surface mesh. Built by [`MeshReport::new`].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MeshReport {
@@ -34,8 +41,25 @@ pub struct MeshReport {
     pub manifold: bool,
     /// Every edge is used in opposite directions by its faces.
     pub oriented: bool,
-    /// Positive enclosed volume; `None` unless the mesh is watertight, manifold and oriented.
+    /// Every component faces away from the solid it bounds; `None` unless the mesh is
+    /// watertight, manifold and oriented and encloses a volume. [`MeshReport::new`]
+    /// judges by the total signed volume; `pipeline::inspect_surface` per component,
+    /// from how the components nest (see `inward_components`).
     pub outward: Option<bool>,
+    /// Components whose faces point into the solid they bound (an outermost component
+    /// with negative volume, a cavity with positive volume); `None` when not measured
+    /// (`pipeline::inspect_surface` measures it).
+    pub inward_components: Option<usize>,
+    /// Pairs of triangles that cross each other (not at a shared vertex or edge); `None`
+    /// when not measured (`pipeline::inspect_surface` measures it).
+    pub self_intersections: Option<usize>,
+    /// Watertight, but no component encloses a volume (each one's signed volume is zero
+    /// for the mesh's size): flat, doubled sheets, or all vertices at one point. Such a
+    /// surface bounds no solid.
+    pub flat: bool,
+    /// The largest absolute coordinate; above [`MAX_COORDINATE`] areas and volumes
+    /// overflow and the mesh is refused by the method.
+    pub max_abs_coordinate: f64,
     /// Signed enclosed volume (meaningful for closed meshes).
     pub signed_volume: f64,
     /// Total surface area.
@@ -210,7 +234,21 @@ impl MeshReport {
         let manifold = non_manifold_edges.is_empty() && non_manifold_vertices.is_empty();
         let oriented = inconsistent.is_empty();
         let signed_volume = mesh.signed_volume();
-        let outward = (watertight && manifold && oriented).then_some(signed_volume > 0.0);
+        let diagonal = norm(sub(bbox_max, bbox_min));
+        let max_abs_coordinate = mesh
+            .positions
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, c| m.max(c.abs()));
+        // Flat: no component encloses a volume (components of opposite orientation
+        // may cancel in the total, so each is judged alone).
+        let flat = watertight
+            && max_abs_coordinate <= MAX_COORDINATE
+            && comps
+                .iter()
+                .all(|c| c.signed_volume.abs() <= FLAT_RELATIVE * diagonal.powi(3));
+        let outward = (watertight && manifold && oriented && !flat && signed_volume.is_finite())
+            .then_some(signed_volume > 0.0);
 
         MeshReport {
             vertices: nv,
@@ -223,6 +261,10 @@ impl MeshReport {
             manifold,
             oriented,
             outward,
+            inward_components: None,
+            self_intersections: None,
+            flat,
+            max_abs_coordinate,
             signed_volume,
             area: mesh.area(),
             boundary_edges: boundary.len(),
@@ -238,7 +280,7 @@ impl MeshReport {
             mean_edge_length,
             bbox_min,
             bbox_max,
-            bbox_diagonal: norm(sub(bbox_max, bbox_min)),
+            bbox_diagonal: diagonal,
             component_details: comps,
         }
     }
@@ -258,6 +300,14 @@ impl MeshReport {
             }
         };
         say(self.faces == 0, "no triangles".into());
+        let too_large = self.max_abs_coordinate > MAX_COORDINATE;
+        say(
+            too_large,
+            format!(
+                "coordinates up to {:.3e} are too large (above {MAX_COORDINATE:.0e} products of three overflow): scale the mesh down",
+                self.max_abs_coordinate
+            ),
+        );
         say(
             self.boundary_edges > 0,
             format!(
@@ -287,8 +337,32 @@ impl MeshReport {
             ),
         );
         say(
-            self.outward == Some(false),
-            "oriented inward (negative volume): flip the faces".into(),
+            self.flat && self.faces > 0,
+            if self.bbox_diagonal == 0.0 {
+                "encloses no volume: all vertices are at one point".into()
+            } else {
+                "encloses no volume: the surface is flat (a doubled sheet)".into()
+            },
+        );
+        match self.inward_components {
+            Some(k) if k > 0 && k < self.components => say(
+                true,
+                format!(
+                    "{k} of {} components face into the solid they bound: flip them",
+                    self.components
+                ),
+            ),
+            _ => say(
+                self.outward == Some(false),
+                "oriented inward (negative volume): flip the faces".into(),
+            ),
+        }
+        say(
+            self.self_intersections.is_some_and(|n| n > 0),
+            format!(
+                "crosses itself: {} pairs of triangles intersect",
+                self.self_intersections.unwrap_or(0)
+            ),
         );
         say(
             self.components > 1,
@@ -306,7 +380,7 @@ impl MeshReport {
             ),
         );
         say(
-            self.zero_area_faces > 0,
+            self.zero_area_faces > 0 && !too_large && !self.flat,
             format!(
                 "{} zero-area faces ({} repeat a vertex)",
                 self.zero_area_faces, self.degenerate_faces
@@ -345,19 +419,22 @@ impl fmt::Display for MeshReport {
         )?;
         writeln!(
             f,
-            "bbox [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]  diagonal {:.6}",
-            self.bbox_min[0],
-            self.bbox_min[1],
-            self.bbox_min[2],
-            self.bbox_max[0],
-            self.bbox_max[1],
-            self.bbox_max[2],
-            self.bbox_diagonal
+            "bbox [{}, {}, {}] .. [{}, {}, {}]  diagonal {}",
+            num(self.bbox_min[0]),
+            num(self.bbox_min[1]),
+            num(self.bbox_min[2]),
+            num(self.bbox_max[0]),
+            num(self.bbox_max[1]),
+            num(self.bbox_max[2]),
+            num(self.bbox_diagonal)
         )?;
         writeln!(
             f,
-            "area {:.6}  signed volume {:.6}  mean edge {:.6}  min angle {:.3} deg",
-            self.area, self.signed_volume, self.mean_edge_length, self.min_angle_deg
+            "area {}  signed volume {}  mean edge {}  min angle {:.3} deg",
+            num(self.area),
+            num(self.signed_volume),
+            num(self.mean_edge_length),
+            self.min_angle_deg
         )?;
         let problems = self.problems();
         if problems.is_empty() {
@@ -369,6 +446,16 @@ impl fmt::Display for MeshReport {
             }
             Ok(())
         }
+    }
+}
+
+/// A number for a person: six decimals in the everyday range, else scientific
+/// notation (never a 300-digit number).
+fn num(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x:.6}")
+    } else {
+        format!("{x:.6e}")
     }
 }
 

@@ -131,6 +131,17 @@ impl Topology {
         (e != NO_EDGE).then_some(e as usize)
     }
 
+    /// The face across side `i` of face `f` (from corner `i` to corner `i+1`) and the
+    /// edge they share, when that edge is manifold (exactly two faces).
+    pub fn across(&self, f: usize, i: usize) -> Option<(usize, usize)> {
+        let e = self.face_edge(f, i)?;
+        match *self.edge_faces(e) {
+            [a, b] if a as usize == f => Some((b as usize, e)),
+            [a, b] if b as usize == f => Some((a as usize, e)),
+            _ => None,
+        }
+    }
+
     /// Faces incident to vertex `v` (a face appears once per corner at `v`).
     pub fn vertex_faces(&self, v: usize) -> &[u32] {
         let (s, t) = (self.vertex_face_start[v], self.vertex_face_start[v + 1]);

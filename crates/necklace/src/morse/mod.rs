@@ -124,10 +124,79 @@ pub struct MorseOptions {
     /// Matching radius of the tracking, in multiples of the mean edge length at the
     /// critical point (default 2).
     pub track_radius: f64,
+    /// The most heat steps (levels of the scale space, or the paper schedule's `steps`)
+    /// a run may take (default [`DEFAULT_MAX_STEPS`]); more is refused with
+    /// [`ErrorKind::OverBudget`](crate::error::ErrorKind::OverBudget) before any work.
+    pub max_steps: usize,
     /// The linear solver's stopping rule and warm start (its `history` left at `None`
     /// takes six stored solutions on the scale space, three on the paper schedule).
     pub solver: SolverOptions,
 }
+
+impl MorseOptions {
+    /// Check the options on their own (ranges, and the step budget): the errors
+    /// [`analyze`] would return before doing any work.
+    pub fn check(&self) -> Result<()> {
+        let heat_steps = match self.schedule {
+            Schedule::ScaleSpace => self.levels,
+            Schedule::Paper => self.steps,
+        };
+        if heat_steps > self.max_steps {
+            return Err(Error::new(
+                crate::error::ErrorKind::OverBudget,
+                format!(
+                    "{heat_steps} heat steps are above the budget of {} (each is a linear solve over the whole volume); raise it with --max-steps",
+                    self.max_steps
+                ),
+            ));
+        }
+        if !(self.tau > 0.0 && self.tau.is_finite()) {
+            return Err(Error::invalid_argument(format!(
+                "tau = {} must be positive",
+                self.tau
+            )));
+        }
+        if self.initial_steps == 0 || self.steps < self.initial_steps {
+            return Err(Error::invalid_argument(format!(
+                "steps = {} must be at least initial_steps = {} (and that at least 1)",
+                self.steps, self.initial_steps
+            )));
+        }
+        if !(self.track_radius > 0.0 && self.track_radius.is_finite()) {
+            return Err(Error::invalid_argument(format!(
+                "track_radius = {} must be positive",
+                self.track_radius
+            )));
+        }
+        if self.levels == 0 {
+            return Err(Error::invalid_argument("levels must be at least 1"));
+        }
+        if !(self.max_scale > 0.0 && self.max_scale.is_finite()) {
+            return Err(Error::invalid_argument(format!(
+                "max_scale = {} must be positive",
+                self.max_scale
+            )));
+        }
+        if let Some(s) = self.min_scale {
+            if !(s > 0.0 && s.is_finite()) {
+                return Err(Error::invalid_argument(format!(
+                    "min_scale = {s} must be positive"
+                )));
+            }
+        }
+        if !(self.min_bulge >= 1.0 && self.min_bulge.is_finite()) {
+            return Err(Error::invalid_argument(format!(
+                "min_bulge = {} must be at least 1",
+                self.min_bulge
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The default budget of heat steps, [`MorseOptions::max_steps`]: 50 times the paper's
+/// 20 steps, 30 times the scale space's 32 levels.
+pub const DEFAULT_MAX_STEPS: usize = 1000;
 
 /// Solutions the paper schedule's solver keeps for its initial guess: three, as when
 /// that schedule was the default, so that it gives the same saddles as then.
@@ -147,6 +216,7 @@ impl Default for MorseOptions {
             steps: 20,
             min_persistence: 5,
             track_radius: 2.0,
+            max_steps: DEFAULT_MAX_STEPS,
             solver: SolverOptions::default(),
         }
     }
@@ -932,47 +1002,7 @@ fn check_inputs(mesh: &TetMesh, field: &[f64], options: &MorseOptions) -> Result
             "the field is not finite at vertex {v}"
         )));
     }
-    if !(options.tau > 0.0 && options.tau.is_finite()) {
-        return Err(Error::invalid_argument(format!(
-            "tau = {} must be positive",
-            options.tau
-        )));
-    }
-    if options.initial_steps == 0 || options.steps < options.initial_steps {
-        return Err(Error::invalid_argument(format!(
-            "steps = {} must be at least initial_steps = {} (and that at least 1)",
-            options.steps, options.initial_steps
-        )));
-    }
-    if !(options.track_radius > 0.0 && options.track_radius.is_finite()) {
-        return Err(Error::invalid_argument(format!(
-            "track_radius = {} must be positive",
-            options.track_radius
-        )));
-    }
-    if options.levels == 0 {
-        return Err(Error::invalid_argument("levels must be at least 1"));
-    }
-    if !(options.max_scale > 0.0 && options.max_scale.is_finite()) {
-        return Err(Error::invalid_argument(format!(
-            "max_scale = {} must be positive",
-            options.max_scale
-        )));
-    }
-    if let Some(s) = options.min_scale {
-        if !(s > 0.0 && s.is_finite()) {
-            return Err(Error::invalid_argument(format!(
-                "min_scale = {s} must be positive"
-            )));
-        }
-    }
-    if !(options.min_bulge >= 1.0 && options.min_bulge.is_finite()) {
-        return Err(Error::invalid_argument(format!(
-            "min_bulge = {} must be at least 1",
-            options.min_bulge
-        )));
-    }
-    Ok(())
+    options.check()
 }
 
 /// Bounding box of the surface vertices (of all vertices when there are none).

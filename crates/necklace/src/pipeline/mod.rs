@@ -4,8 +4,10 @@
 //! and smoothing → critical points → neck loops. Each stage is a module that takes plain
 //! data and returns plain data; only this module calls one stage with another's output.
 //! Steps so far:
-//! - [`prepare_surface`] checks that a mesh is a closed, manifold, consistently oriented
-//!   surface and turns an inward-oriented one outward, saying so;
+//! - [`prepare_input`] (submodule `input`) refuses what no stage can use, repairs what
+//!   has one right answer (unreferenced vertices, faces that disagree with their
+//!   neighbours, components facing into their solid) and says what it did and what is
+//!   still unusual (open, non-manifold, crossing itself);
 //! - [`volume_mesh`] (submodule `volume`) builds the tet mesh of the inside
 //!   ([`Side::Inside`]) or of the shell between the surface and a bounding sphere
 //!   ([`Side::Outside`]): it wraps the surface's signed distance (`distance`) as a
@@ -18,15 +20,16 @@
 //! - [`find_necks`] runs the whole method on both sides and hands each side's saddles to
 //!   `loops` (plane cut, tightening, selection), returning a [`NeckReport`].
 
+mod input;
 mod volume;
 
-use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
 
 use crate::distance::SurfaceDistance;
-use crate::error::{Error, ErrorKind, Result};
+use crate::error::{Error, Result};
+use crate::geom::{norm, sub};
 use crate::io;
 use crate::loops::{self, DropReason, DroppedLoop, LoopKind, LoopOptions, NeckLoop, Role, Seed};
 use crate::mesh::{MeshReport, SurfaceMesh};
@@ -34,67 +37,11 @@ use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule, Vertex
 use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 
+pub use input::{inspect_surface, load_surface, prepare_input, prepare_surface, PreparedSurface};
 pub use volume::{
     default_h, expected_topology, volume_mesh, Mesher, TopologyCheck, VolumeOptions, VolumeReport,
     VolumeResult, MAX_ROUNDS,
 };
-
-/// A surface accepted as input to the method, with the report it was checked against.
-#[derive(Debug, Clone)]
-pub struct PreparedSurface {
-    /// The mesh, outward-oriented.
-    pub mesh: SurfaceMesh,
-    /// The validity report of the mesh as given.
-    pub report: MeshReport,
-    /// Whether the faces were flipped because the input was oriented inward.
-    pub flipped: bool,
-}
-
-/// Check that `mesh` is a closed, manifold, consistently oriented surface, and orient
-/// it outward. Several components are allowed; each must be closed. An error names
-/// every problem found.
-pub fn prepare_surface(mut mesh: SurfaceMesh) -> Result<PreparedSurface> {
-    let report = MeshReport::new(&mesh);
-    let fatal = !(report.watertight && report.manifold && report.oriented);
-    if mesh.triangles.is_empty() || fatal {
-        return Err(Error::new(
-            ErrorKind::InvalidMesh,
-            format!(
-                "not a closed manifold oriented surface: {}",
-                report.problems().join("; ")
-            ),
-        ));
-    }
-    let flipped = report.outward == Some(false);
-    if flipped {
-        mesh.flip_orientation();
-    }
-    Ok(PreparedSurface {
-        mesh,
-        report,
-        flipped,
-    })
-}
-
-/// Orient a surface for volume meshing without requiring it to be closed: faces are
-/// flipped when the signed volume is negative (an open or self-intersecting mesh is
-/// still meshed as the solid its winding number describes). Returns the report of the
-/// mesh as given and whether it was flipped.
-pub fn orient_for_volume(mut mesh: SurfaceMesh) -> (SurfaceMesh, MeshReport, bool) {
-    let report = MeshReport::new(&mesh);
-    let flipped = report.signed_volume < 0.0;
-    if flipped {
-        mesh.flip_orientation();
-    }
-    (mesh, report, flipped)
-}
-
-/// Read a mesh file and [`prepare_surface`] it; errors name the file.
-pub fn load_surface(path: impl AsRef<Path>) -> Result<PreparedSurface> {
-    let path = path.as_ref();
-    let mesh = io::read_mesh(path)?;
-    prepare_surface(mesh).map_err(|e| e.in_file(path))
-}
 
 /// Which volume to mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -206,44 +153,6 @@ pub fn critical_point_cloud(result: &MorseResult) -> io::PointCloud {
     ];
     cloud.colors = Some(colors);
     cloud
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn tetrahedron() -> SurfaceMesh {
-        SurfaceMesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        )
-        .unwrap()
-    }
-
-    #[test]
-    fn an_inward_surface_is_flipped_and_says_so() {
-        let mut mesh = tetrahedron();
-        let ok = prepare_surface(mesh.clone()).unwrap();
-        assert!(!ok.flipped);
-        mesh.flip_orientation();
-        let fixed = prepare_surface(mesh).unwrap();
-        assert!(fixed.flipped);
-        assert!(fixed.mesh.signed_volume() > 0.0);
-    }
-
-    #[test]
-    fn an_open_surface_is_refused_with_its_problems() {
-        let mut mesh = tetrahedron();
-        mesh.triangles.pop();
-        let err = prepare_surface(mesh).unwrap_err();
-        assert_eq!(err.kind(), ErrorKind::InvalidMesh);
-        assert!(err.to_string().contains("3 boundary edges"), "{err}");
-    }
 }
 
 /// Options of [`find_necks`]: which sides, and each stage's options.
@@ -381,10 +290,18 @@ pub struct NeckReport {
     pub timings: NeckTimings,
     /// Per side: volume mesh, saddles, stage timings.
     pub sides: Vec<SideReport>,
-    /// Whether the input faces pointed inward and were flipped before meshing.
+    /// Whether any input face was turned round before meshing (an inverted mesh or
+    /// component, faces that disagreed with their neighbours); see `notes`.
     pub flipped: bool,
-    /// What the caller should know, one line each: each side's volume warnings (a
-    /// topology that differs from the surface's, a budget that bound, ...).
+    /// What was done to the input before meshing, one line each ([`prepare_input`]).
+    pub notes: Vec<String>,
+    /// The surface the method worked on: the input as [`prepare_input`] left it
+    /// (unreferenced vertices removed, faces oriented); not in the JSON.
+    #[serde(skip)]
+    pub surface: SurfaceMesh,
+    /// What the caller should know, one line each: what is unusual about the input
+    /// (open, crossing itself, ...), each side's volume warnings (a topology that
+    /// differs from the surface's, a budget that bound, ...).
     pub warnings: Vec<String>,
 }
 
@@ -397,6 +314,63 @@ pub struct NeckTimings {
     pub tunnels: Option<StageTimings>,
     /// Sum over the sides run.
     pub total: StageTimings,
+}
+
+/// How many seeds lie near a crossing face: a corner of a crossing triangle within
+/// [`CROSSING_REACH`] times the seed's distance to the surface (its loop's radius,
+/// about), plus the triangle's longest side.
+fn seeds_near(surface: &SurfaceMesh, crossing_faces: &[u32], seeds: &[Seed]) -> usize {
+    if crossing_faces.is_empty() || seeds.is_empty() {
+        return 0;
+    }
+    let positions: Vec<[f64; 3]> = seeds.iter().map(|s| s.position).collect();
+    let radii = SurfaceDistance::new(surface).distances(&positions);
+    let crossing: Vec<[[f64; 3]; 3]> = crossing_faces
+        .iter()
+        .map(|&f| surface.corners(f as usize))
+        .collect();
+    positions
+        .iter()
+        .zip(&radii)
+        .filter(|(p, r)| {
+            crossing.iter().any(|t| {
+                // A corner within reach, give or take the triangle's size.
+                let size = (0..3)
+                    .map(|i| norm(sub(t[i], t[(i + 1) % 3])))
+                    .fold(0.0, f64::max);
+                t.iter()
+                    .any(|c| norm(sub(*c, **p)) < CROSSING_REACH * **r + size)
+            })
+        })
+        .count()
+}
+
+/// See [`seeds_near`].
+const CROSSING_REACH: f64 = 4.0;
+
+/// The part of a volume mesh's boundary on the input surface (its surface-kind
+/// faces, not the outer sphere), oriented like the surface (outward from the solid),
+/// without unused vertices.
+pub fn meshed_boundary(mesh: &TetMesh, side: Side) -> SurfaceMesh {
+    let on_surface = |f: &[u32; 3]| {
+        f.iter()
+            .all(|&v| mesh.kinds[v as usize] == VertexKind::Surface)
+    };
+    let triangles = mesh
+        .boundary_faces()
+        .into_iter()
+        .filter(on_surface)
+        .map(|f| match side {
+            Side::Inside => f,
+            // The shell's boundary faces point out of the shell, into the solid.
+            Side::Outside => [f[0], f[2], f[1]],
+        })
+        .collect();
+    let all = SurfaceMesh {
+        positions: mesh.positions.clone(),
+        triangles,
+    };
+    crate::mesh::remove_unreferenced(&all).0
 }
 
 /// The loop stage's seeds from the Morse stage's selected 2-saddles, in their order:
@@ -428,9 +402,8 @@ pub fn loop_seeds(result: &MorseResult) -> Vec<Seed> {
         .collect()
 }
 
-/// The whole method on a closed, outward-oriented surface (see [`prepare_surface`]):
-/// for each side asked for, volume mesh → distance field → smoothing and critical
-/// points → neck loops on `surface`.
+/// The whole method on a surface: [`prepare_input`], then for each side asked for,
+/// volume mesh → distance field → smoothing and critical points → neck loops.
 pub fn find_necks(surface: &SurfaceMesh, options: &NeckOptions) -> Result<NeckReport> {
     find_necks_with_progress(surface, options, &Silent)
 }
@@ -447,31 +420,21 @@ pub fn find_necks_with_progress(
             "nothing to do: ask for handles, tunnels or both",
         ));
     }
-    if surface.triangles.is_empty() {
-        return Err(Error::new(
-            ErrorKind::InvalidMesh,
-            "the surface has no triangles",
-        ));
-    }
-    // Inward-facing input is turned round rather than meshed inside out (a copy only
-    // then).
+    options.morse.check()?;
+    // 1. The input, once: repaired, oriented, its problems said.
+    let prepared = prepare_input(surface.clone())?;
+    let surface = &prepared.mesh;
     let surface_report = MeshReport::new(surface);
-    let flipped = surface_report.signed_volume < 0.0;
-    let turned;
-    let surface = if flipped {
-        turned = orient_for_volume(surface.clone()).0;
-        &turned
-    } else {
-        surface
-    };
     let mut report = NeckReport {
         loops: Vec::new(),
         dropped: Vec::new(),
         morse: Vec::new(),
         timings: NeckTimings::default(),
         sides: Vec::new(),
-        flipped,
-        warnings: Vec::new(),
+        flipped: prepared.flipped,
+        notes: prepared.notes.clone(),
+        warnings: prepared.warnings.clone(),
+        surface: surface.clone(),
     };
     let sides = [
         (Side::Inside, options.handles),
@@ -507,13 +470,27 @@ pub fn find_necks_with_progress(
                 && options.morse.schedule == Schedule::ScaleSpace,
             ..options.loops
         };
-        let found = loops::find_loops_with_progress(
-            surface,
-            &loop_seeds(&result),
-            kind,
-            &loop_options,
-            progress,
-        )?;
+        // A surface that crosses itself is no place for a geodesic where it crosses:
+        // the loop round the neck of two overlapping balls runs along the crossing, and
+        // tightening on either ball alone slides it off. Where a neck lies by a
+        // crossing, this side's loops are cut and tightened on the volume mesh's
+        // boundary, the surface of the solid that was meshed.
+        let seeds = loop_seeds(&result);
+        let near = seeds_near(surface, &prepared.crossing_faces, &seeds);
+        let boundary;
+        let loop_surface = if near > 0 {
+            boundary = meshed_boundary(&volume.mesh, side);
+            report.warnings.push(format!(
+                "{name}: {near} of {} necks lie where the surface crosses itself, so this side's loops are cut and tightened on the volume mesh's boundary ({} triangles, the surface of the solid meshed) instead of the input",
+                seeds.len(),
+                boundary.num_triangles()
+            ));
+            &boundary
+        } else {
+            surface
+        };
+        let found =
+            loops::find_loops_with_progress(loop_surface, &seeds, kind, &loop_options, progress)?;
 
         let t = &result.timings;
         let l = &found.timings;

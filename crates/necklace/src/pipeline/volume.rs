@@ -32,7 +32,7 @@ use serde::Serialize;
 use super::Side;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
-use crate::geom::{add, dot, norm, scale, sub};
+use crate::geom::{add, cross, dot, norm, scale, sub};
 use crate::mesh::{MeshReport, SurfaceMesh, Topology};
 use crate::tet::{ComponentTopology, TetMesh, TetTopology, VertexKind};
 use crate::volume::{self, Domain, SharpFeatures, SizingFeature, StuffingOptions, StuffingStats};
@@ -81,6 +81,17 @@ impl Default for VolumeOptions {
 /// Most meshings of one side: the first, and refinements while the topology differs
 /// from the surface's.
 pub const MAX_ROUNDS: usize = 4;
+
+/// Cells along the curve where the surface crosses itself are this many times finer
+/// than `h`.
+const CROSSING_REFINEMENT: f64 = 8.0;
+
+/// The largest lattice spacing accepted, as a fraction of the bounding-box diagonal.
+const MAX_H_FRACTION: f64 = 0.25;
+
+/// The inside mesh's volume may differ from the volume the surface encloses by this
+/// fraction before a warning says so (the boundary's chords cut off a little).
+const VOLUME_TOLERANCE: f64 = 0.05;
 
 /// Parts and gaps thinner than this many `h` get finer cells (at `h`, two cells across).
 const THIN_FACTOR: f64 = 2.0;
@@ -292,6 +303,11 @@ pub fn volume_mesh(
     if !(h.is_finite() && h > 0.0) {
         return Err(Error::invalid_argument(format!("h = {h} must be positive")));
     }
+    if h > MAX_H_FRACTION * diagonal {
+        return Err(Error::invalid_argument(format!(
+            "h = {h:.3e} is above a quarter of the surface's bounding-box diagonal ({diagonal:.3e}): no lattice that coarse resolves the surface (the default is diagonal / 64)"
+        )));
+    }
     if !(options.sphere_scale > 1.0 && options.sphere_scale.is_finite()) {
         return Err(Error::invalid_argument(format!(
             "sphere_scale = {} must exceed 1 (the sphere must enclose the surface)",
@@ -303,7 +319,7 @@ pub fn volume_mesh(
     let centre = scale(add(lo, hi), 0.5);
     let radius = options.sphere_scale * 0.5 * diagonal;
     let mut warnings = Vec::new();
-    let crossings = distance.self_intersections(&surface.triangles);
+    let crossings = crossing_pairs(surface, &distance);
     let expected = if crossings.is_empty() {
         // A closed manifold that does not cross itself: the closest point tells the
         // sign (exact, and much cheaper near the surface than the winding number).
@@ -347,14 +363,34 @@ pub fn volume_mesh(
                 .iter()
                 .map(|t| (t[0].min(t[1]) / CELLS_ACROSS).min(h))
                 .collect();
+            // Where the surface crosses itself, the solid's boundary has a crease along
+            // the crossing curve (two overlapping balls meet in a concave ring): it is
+            // snapped onto like any crease, with cells finer there so that the mesh's
+            // edges follow it instead of zigzagging across it.
+            let crossing_curve: Vec<[[f64; 3]; 2]> = crossings
+                .iter()
+                .filter_map(|&[f, g]| {
+                    crossing_segment(surface.corners(f as usize), surface.corners(g as usize))
+                })
+                .collect();
+            let mut features = sharp_features(surface, &topology);
+            features.edges.extend(&crossing_curve);
+            let mut sizing = thin_part_sizing(surface, &thickness);
+            let crease_cell = h / CROSSING_REFINEMENT;
+            sizing.extend(crossing_curve.iter().map(|&[p, q]| SizingFeature {
+                corners: [p, q, q],
+                spacing: crease_cell,
+                reach: 2.0 * crease_cell,
+                toward: [0.0; 3],
+            }));
             let mut domain = SurfaceDomain {
                 distance: &distance,
                 side,
                 centre,
                 radius,
                 bounds: (lo, hi),
-                sizing: thin_part_sizing(surface, &thickness),
-                features: sharp_features(surface, &topology),
+                sizing,
+                features,
             };
             let stuffing = StuffingOptions {
                 h,
@@ -386,7 +422,32 @@ pub fn volume_mesh(
             (mesh, found, None, 0, 1)
         }
     };
+    if mesh.num_tets() == 0 {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            format!(
+                "the {} volume mesh is empty: no lattice point of spacing h = {h:.3e} fell inside (a part too thin for the budget, or a surface that encloses nothing); a smaller --h may help",
+                side.name()
+            ),
+        ));
+    }
     let matches = expected.as_ref().map(|e| *e == found);
+    if expected.is_none() {
+        warnings.push(format!(
+            "the {} volume mesh has topology {found}, which the surface cannot confirm (it crosses itself, or a component has no genus)",
+            side.name()
+        ));
+    }
+    if side == Side::Inside && crossings.is_empty() {
+        let enclosed = surface.signed_volume();
+        let meshed = mesh.volume();
+        if (meshed / enclosed - 1.0).abs() > VOLUME_TOLERANCE {
+            warnings.push(format!(
+                "the inside volume mesh holds {:.1} % of the volume the surface encloses ({meshed:.4e} of {enclosed:.4e}): parts thinner than its cells are lost or merged; a smaller --h may help",
+                100.0 * meshed / enclosed
+            ));
+        }
+    }
     if matches == Some(false) {
         warnings.push(format!(
             "the {} volume mesh's topology ({found}) differs from the surface's ({}) after {rounds} meshing{}: features below the resolution; a smaller --h may help",
@@ -578,7 +639,7 @@ impl Side {
 /// genus is undefined or the surface crosses itself.
 pub fn expected_topology(surface: &SurfaceMesh, side: Side) -> Option<TetTopology> {
     let distance = SurfaceDistance::new(surface);
-    if !distance.self_intersections(&surface.triangles).is_empty() {
+    if !crossing_pairs(surface, &distance).is_empty() {
         return None;
     }
     predict(surface, side)
@@ -632,7 +693,7 @@ fn predict(surface: &SurfaceMesh, side: Side) -> Option<TetTopology> {
 /// The component directly enclosing each component of the surface (`None` for the
 /// outermost), by the winding number of each component's triangles at points of the
 /// others. `None` when two components cross (a component partly inside another).
-fn nesting(surface: &SurfaceMesh, report: &MeshReport) -> Option<Vec<Option<usize>>> {
+pub(super) fn nesting(surface: &SurfaceMesh, report: &MeshReport) -> Option<Vec<Option<usize>>> {
     let n = report.component_details.len();
     if n == 1 {
         return Some(vec![None]);
@@ -928,6 +989,63 @@ fn sharp_features(surface: &SurfaceMesh, topology: &Topology) -> SharpFeatures {
         }
     }
     features
+}
+
+/// Two triangles cross when they meet along a segment longer than this fraction of the
+/// bounding-box diagonal.
+const CROSSING_TOLERANCE: f64 = 1e-9;
+
+/// The pairs of triangles of `surface` that cross each other (`distance` is its
+/// distance structure). Triangles that meet along a segment shorter than rounding
+/// (nearly coplanar neighbours of a finely split mesh) touch; they do not cross.
+pub(super) fn crossing_pairs(surface: &SurfaceMesh, distance: &SurfaceDistance) -> Vec<[u32; 2]> {
+    let tolerance = CROSSING_TOLERANCE * surface.bbox_diagonal();
+    distance
+        .self_intersections(&surface.triangles)
+        .into_iter()
+        .filter(|&[f, g]| {
+            crossing_segment(surface.corners(f as usize), surface.corners(g as usize))
+                .is_some_and(|[p, q]| norm(sub(p, q)) > tolerance)
+        })
+        .collect()
+}
+
+/// The segment where two crossing triangles meet: each one's part in the other's plane,
+/// overlapped along the planes' common line. `None` for coplanar or separate triangles.
+fn crossing_segment(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> Option<[[f64; 3]; 2]> {
+    let normal = |t: &[[f64; 3]; 3]| cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    let (na, nb) = (normal(&a), normal(&b));
+    // The part of triangle t in the plane through `origin` with normal n.
+    let in_plane = |t: &[[f64; 3]; 3], n: [f64; 3], origin: [f64; 3]| {
+        let d = t.map(|p| dot(n, sub(p, origin)));
+        if d.iter().all(|&x| x == 0.0) {
+            return None;
+        }
+        let mut points = Vec::with_capacity(3);
+        for i in 0..3 {
+            let j = (i + 1) % 3;
+            if d[i] == 0.0 {
+                points.push(t[i]);
+            } else if (d[i] < 0.0) != (d[j] < 0.0) && d[j] != 0.0 {
+                let s = d[i] / (d[i] - d[j]);
+                points.push(add(t[i], scale(sub(t[j], t[i]), s)));
+            }
+        }
+        (points.len() >= 2).then(|| [points[0], points[1]])
+    };
+    let sa = in_plane(&a, nb, b[0])?;
+    let sb = in_plane(&b, na, a[0])?;
+    let line = cross(na, nb);
+    let along = |p: [f64; 3]| dot(line, p);
+    let (a0, a1) = (along(sa[0]), along(sa[1]));
+    let (b0, b1) = (along(sb[0]), along(sb[1]));
+    let lo = a0.min(a1).max(b0.min(b1));
+    let hi = a0.max(a1).min(b0.max(b1));
+    if lo >= hi || lo.is_nan() || hi.is_nan() || a0 == a1 {
+        return None;
+    }
+    let at = |t: f64| add(sa[0], scale(sub(sa[1], sa[0]), (t - a0) / (a1 - a0)));
+    Some([at(lo), at(hi)])
 }
 
 /// Largest distance of a surface-kind vertex of `mesh` to the input surface.

@@ -21,7 +21,6 @@ pub mod chart;
 mod font;
 mod raster;
 
-use std::io::BufWriter;
 use std::path::Path;
 
 use rayon::prelude::*;
@@ -282,11 +281,9 @@ impl Image {
     /// Write as a PNG file; errors name the file.
     pub fn write_png(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
+        check_png_name(path)?;
         let bytes = self.encode_png().map_err(|e| e.in_file(path))?;
-        let file = std::fs::File::create(path)
-            .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))?;
-        std::io::Write::write_all(&mut BufWriter::new(file), &bytes)
-            .map_err(|e| Error::new(ErrorKind::Io, format!("cannot write: {e}")).in_file(path))
+        crate::file::write_atomic(path, &bytes)
     }
 
     /// Read an 8-bit RGB or RGBA PNG (for checking pictures in tests).
@@ -607,4 +604,22 @@ fn draw_view(
         }
     }
     canvas
+}
+
+/// A picture is written as PNG only: refuse another extension (PNG bytes in a `.jpg`
+/// would open nowhere).
+pub fn check_png_name(path: &Path) -> Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if ext.as_deref() == Some("png") {
+        Ok(())
+    } else {
+        Err(Error::new(
+            ErrorKind::UnknownFormat,
+            "pictures are written as PNG only: use a .png file name",
+        )
+        .in_file(path))
+    }
 }

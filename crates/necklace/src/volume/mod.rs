@@ -499,7 +499,7 @@ impl Grid {
             root_size *= 2;
             if root_size > (1i64 << 52) {
                 return Err(Error::invalid_argument(format!(
-                    "h = {h} is too small for a domain of extent {extent}"
+                    "h = {h:.3e} is too small for a domain of extent {extent:.3e}"
                 )));
             }
         }

@@ -1,0 +1,307 @@
+//! The input step of the method: a mesh as read becomes the surface every stage works
+//! on, and everything done to it on the way is said.
+//!
+//! [`prepare_input`] refuses what no stage can work with, one line naming the problem:
+//! no triangles, coordinates so large that volumes overflow ([`MAX_COORDINATE`]), all
+//! vertices at one point, a closed surface that encloses no volume (a doubled sheet).
+//! It repairs what has one right answer, each repair a note:
+//! 1. vertices no triangle uses are removed (they would set the bounding box, and with
+//!    it the lattice spacing and the smoothing scales);
+//! 2. faces are turned to agree with their neighbours, per component
+//!    (`mesh::orient_consistently`, libigl's `bfs_orient`);
+//! 3. each closed component is turned to face away from the solid it bounds: an
+//!    outermost component outward, a cavity inside it inward, a part inside the cavity
+//!    outward again (by how the components nest, from winding numbers), so that no
+//!    component is silently meshed as empty space.
+//!
+//! What it cannot repair is a warning, and the method goes on with the solid the winding
+//! number describes: an open or non-manifold surface, a non-orientable component, and a
+//! surface that crosses itself (whose loops are then tightened on the volume mesh's
+//! boundary, see `find_necks`). [`inspect_surface`] is the report `necklace info`
+//! prints: [`MeshReport::new`] plus the two measures that need the `distance` service
+//! (components facing the wrong way, crossing triangles).
+
+use std::path::Path;
+
+use super::volume::{crossing_pairs, nesting};
+use crate::distance::SurfaceDistance;
+use crate::error::{Error, ErrorKind, Result};
+use crate::io;
+use crate::mesh::{
+    orient_consistently, remove_unreferenced, MeshReport, SurfaceMesh, MAX_COORDINATE,
+};
+
+/// A surface accepted as input to the method, with what was done to it.
+#[derive(Debug, Clone)]
+pub struct PreparedSurface {
+    /// The mesh: no unreferenced vertices, faces consistently oriented, each closed
+    /// component facing away from the solid it bounds.
+    pub mesh: SurfaceMesh,
+    /// The report of the mesh as given ([`inspect_surface`]).
+    pub report: MeshReport,
+    /// Whether any face was turned round to point outward (a whole inverted mesh, an
+    /// inverted component, or faces that disagreed with their neighbours).
+    pub flipped: bool,
+    /// The triangles that cross another (sorted, each once; empty for an embedded
+    /// surface). Face indices are those of the input and of `mesh` alike: preparing
+    /// keeps the faces and their order.
+    pub crossing_faces: Vec<u32>,
+    /// The repairs made, one line each.
+    pub notes: Vec<String>,
+    /// What is still unusual about the surface, one line each.
+    pub warnings: Vec<String>,
+}
+
+/// [`MeshReport::new`] plus, per component, whether it faces into the solid it bounds
+/// (`inward_components`, and `outward` judged by it) and the number of crossing
+/// triangle pairs (`self_intersections`).
+pub fn inspect_surface(mesh: &SurfaceMesh) -> MeshReport {
+    inspect(mesh).0
+}
+
+/// [`inspect_surface`] and the crossing pairs of triangles.
+fn inspect(mesh: &SurfaceMesh) -> (MeshReport, Vec<[u32; 2]>) {
+    let mut report = MeshReport::new(mesh);
+    if mesh.triangles.is_empty() || report.max_abs_coordinate > MAX_COORDINATE {
+        return (report, Vec::new());
+    }
+    let distance = SurfaceDistance::new(mesh);
+    let crossings = crossing_pairs(mesh, &distance);
+    report.self_intersections = Some(crossings.len());
+    if report.outward.is_some() && crossings.is_empty() {
+        if let Some(wrong) = facing_wrong_way(mesh, &report) {
+            let k = wrong.iter().filter(|&&w| w).count();
+            report.inward_components = Some(k);
+            report.outward = Some(k == 0);
+        }
+    }
+    (report, crossings)
+}
+
+/// Check a mesh, repair what has one right answer and say what was done (see the
+/// module doc). Open, non-manifold or self-crossing input is accepted with warnings.
+pub fn prepare_input(mesh: SurfaceMesh) -> Result<PreparedSurface> {
+    let (report, crossings) = inspect(&mesh);
+    refuse_unusable(&report)?;
+    let mut notes = Vec::new();
+    let mut warnings = Vec::new();
+
+    // 1. Unreferenced vertices.
+    let (mut mesh, removed) = remove_unreferenced(&mesh);
+    if removed > 0 {
+        notes.push(format!(
+            "removed {removed} vertices that no face uses (they would have set the bounding box)"
+        ));
+    }
+
+    // 2. Faces that disagree with their neighbours.
+    let (consistent, turned) = orient_consistently(&mesh);
+    mesh = consistent;
+    if turned.flipped_faces > 0 {
+        notes.push(format!(
+            "turned {} faces round to agree with their neighbours ({} component{})",
+            turned.flipped_faces,
+            turned.components,
+            if turned.components == 1 { "" } else { "s" }
+        ));
+    }
+    if turned.non_orientable > 0 {
+        warnings.push(format!(
+            "{} component{} cannot be oriented (a Möbius band or a Klein bottle): meshed as the winding number says",
+            turned.non_orientable,
+            if turned.non_orientable == 1 { "" } else { "s" }
+        ));
+    }
+
+    // 3. Components that face into the solid they bound.
+    let oriented = MeshReport::new(&mesh);
+    let mut flipped_components = 0;
+    if oriented.outward.is_some() {
+        let wrong = if report.self_intersections == Some(0) {
+            facing_wrong_way(&mesh, &oriented)
+        } else {
+            None
+        };
+        let wrong = wrong.unwrap_or_else(|| {
+            // Crossing or unnestable components: the whole mesh by its volume.
+            vec![oriented.signed_volume < 0.0; oriented.components]
+        });
+        flipped_components = flip_components(&mut mesh, &wrong);
+        if flipped_components == oriented.components {
+            notes.push("faces flipped to point outward".into());
+        } else if flipped_components > 0 {
+            notes.push(format!(
+                "flipped {flipped_components} of {} components that faced into the solid they bound",
+                oriented.components
+            ));
+        }
+    } else if oriented.signed_volume < 0.0 {
+        // Open or non-manifold: the total volume is the only guide.
+        mesh.flip_orientation();
+        flipped_components = oriented.components;
+        notes.push("faces flipped to point outward (negative volume)".into());
+    }
+    let after = MeshReport::new(&mesh);
+    if after.flat {
+        return Err(flat_error(&after));
+    }
+
+    // What is left.
+    let self_intersections = crossings.len();
+    let mut crossing_faces: Vec<u32> = crossings.iter().flatten().copied().collect();
+    crossing_faces.sort_unstable();
+    crossing_faces.dedup();
+    for problem in after.problems() {
+        let said_below = problem.starts_with("crosses itself");
+        if !said_below && !problem.ends_with("connected components") {
+            warnings.push(problem);
+        }
+    }
+    if self_intersections > 0 {
+        warnings.push(format!(
+            "the surface crosses itself ({self_intersections} pairs of triangles): the method works on the solid its winding number encloses"
+        ));
+    }
+    Ok(PreparedSurface {
+        mesh,
+        report,
+        flipped: turned.flipped_faces > 0 || flipped_components > 0,
+        crossing_faces,
+        notes,
+        warnings,
+    })
+}
+
+/// Check that `mesh` is a closed, manifold surface and [`prepare_input`] it. An error
+/// names every problem found.
+pub fn prepare_surface(mesh: SurfaceMesh) -> Result<PreparedSurface> {
+    let report = MeshReport::new(&mesh);
+    if mesh.triangles.is_empty() || !(report.watertight && report.manifold) {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            format!(
+                "not a closed manifold surface: {}",
+                report.problems().join("; ")
+            ),
+        ));
+    }
+    prepare_input(mesh)
+}
+
+/// Read a mesh file and [`prepare_input`] it; errors name the file.
+pub fn load_surface(path: impl AsRef<Path>) -> Result<PreparedSurface> {
+    let path = path.as_ref();
+    let mesh = io::read_mesh(path)?;
+    prepare_input(mesh).map_err(|e| e.in_file(path))
+}
+
+/// The errors for a mesh no stage can work with.
+fn refuse_unusable(report: &MeshReport) -> Result<()> {
+    let invalid = |message: String| Err(Error::new(ErrorKind::InvalidMesh, message));
+    if report.faces == 0 {
+        return invalid("the mesh has no triangles".into());
+    }
+    if report.max_abs_coordinate > MAX_COORDINATE {
+        return invalid(format!(
+            "coordinates up to {:.3e} are too large: above {MAX_COORDINATE:.0e} areas and volumes overflow; scale the mesh down",
+            report.max_abs_coordinate
+        ));
+    }
+    if report.flat {
+        return Err(flat_error(report));
+    }
+    Ok(())
+}
+
+fn flat_error(report: &MeshReport) -> Error {
+    let why = if report.bbox_diagonal == 0.0 {
+        "all its vertices are at one point"
+    } else {
+        "it is flat (a doubled sheet, signed volume 0)"
+    };
+    Error::new(
+        ErrorKind::InvalidMesh,
+        format!("the surface encloses no volume: {why}"),
+    )
+}
+
+/// Per component of a closed, manifold, oriented, embedded mesh, whether it faces into
+/// the solid it bounds: at even nesting depth (outermost, or a part inside a cavity) it
+/// should enclose positive volume, at odd depth (a cavity) negative. `None` when the
+/// components cannot be nested (two of them cross).
+fn facing_wrong_way(mesh: &SurfaceMesh, report: &MeshReport) -> Option<Vec<bool>> {
+    let parent = nesting(mesh, report)?;
+    let depth = |mut i: usize| {
+        let mut d = 0;
+        while let Some(p) = parent[i] {
+            d += 1;
+            i = p;
+            if d > parent.len() {
+                break;
+            }
+        }
+        d
+    };
+    Some(
+        report
+            .component_details
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.signed_volume > 0.0) != (depth(i) % 2 == 0))
+            .collect(),
+    )
+}
+
+/// Turn round every component marked in `which` (components as `Topology::components`
+/// numbers them); returns how many were turned.
+fn flip_components(mesh: &mut SurfaceMesh, which: &[bool]) -> usize {
+    if !which.iter().any(|&w| w) {
+        return 0;
+    }
+    let (component_of, _) = crate::mesh::Topology::new(mesh).components(mesh);
+    for t in &mut mesh.triangles {
+        if component_of[t[0] as usize].is_some_and(|c| which[c as usize]) {
+            t.swap(1, 2);
+        }
+    }
+    which.iter().filter(|&&w| w).count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetrahedron() -> SurfaceMesh {
+        SurfaceMesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn an_inward_surface_is_flipped_and_says_so() {
+        let mut mesh = tetrahedron();
+        let ok = prepare_surface(mesh.clone()).unwrap();
+        assert!(!ok.flipped && ok.notes.is_empty());
+        mesh.flip_orientation();
+        let fixed = prepare_surface(mesh).unwrap();
+        assert!(fixed.flipped);
+        assert_eq!(fixed.notes, ["faces flipped to point outward"]);
+        assert!(fixed.mesh.signed_volume() > 0.0);
+    }
+
+    #[test]
+    fn an_open_surface_is_refused_with_its_problems() {
+        let mut mesh = tetrahedron();
+        mesh.triangles.pop();
+        let err = prepare_surface(mesh).unwrap_err();
+        assert_eq!(err.kind(), ErrorKind::InvalidMesh);
+        assert!(err.to_string().contains("3 boundary edges"), "{err}");
+    }
+}
