@@ -314,7 +314,27 @@ fn main() -> ExitCode {
         bars: Bars::new(!cli.quiet),
         verbose: cli.verbose,
     };
-    match run(cli.command, &ui) {
+    // A panic is our bug: one line naming where, status 1 (never a backtrace dump).
+    std::panic::set_hook(Box::new(|info| {
+        let message = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        let place = info
+            .location()
+            .map_or(String::new(), |l| format!(" at {}:{}", l.file(), l.line()));
+        eprintln!(
+            "necklace: internal error{place}: {}; please report it",
+            printable(&message)
+        );
+    }));
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli.command, &ui)));
+    let Ok(outcome) = outcome else {
+        return ExitCode::from(1);
+    };
+    match outcome {
         Ok(text) => print_stdout(&text),
         Err(err) => {
             eprintln!("necklace: {}", printable(&format!("{err:#}")));
