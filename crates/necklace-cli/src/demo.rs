@@ -28,7 +28,7 @@ pub fn run(dir: &Path, ui: &Ui) -> Result<String> {
         let surface = shape.mesh()?;
         let report = find_necks_with_progress(&surface, &NeckOptions::default(), &ui.bars)?;
         if ui.verbose {
-            eprint!("{}", crate::stage_timings(&report));
+            eprint!("{}", crate::print::stage_timings(&report));
         }
         let folder = dir.join(kind.name());
         let files = OutputOptions {

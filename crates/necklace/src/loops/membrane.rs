@@ -99,6 +99,17 @@ pub enum MembraneFailure {
     NotAround,
 }
 
+impl std::fmt::Display for MembraneFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            MembraneFailure::OnSurface => "the saddle lies on the surface",
+            MembraneFailure::NotClosed => "its landings could not be joined",
+            MembraneFailure::NotEmbedded => "it would pass through the solid",
+            MembraneFailure::NotAround => "it does not go once around the saddle",
+        })
+    }
+}
+
 /// The initial loop around the saddle at `saddle` with unit cutting normal `normal`,
 /// from its membrane (see the module documentation).
 pub fn membrane_loop(

@@ -415,6 +415,75 @@ pub enum DropReason {
     },
 }
 
+impl std::fmt::Display for DropReason {
+    /// One line for a person, e.g. `collapsed: 0.8123 -> 0.0312`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let or_dash = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.3}"));
+        match *self {
+            DropReason::NoLoopAroundSaddle {
+                closed_curves,
+                open_curves,
+                offsets_tried,
+                offset_step,
+            } => write!(
+                f,
+                "no loop around the saddle ({closed_curves} closed and {open_curves} open curves; {offsets_tried} parallel planes tried each side, {offset_step:.3e} apart)"
+            ),
+            DropReason::Collapsed {
+                initial_length,
+                length,
+            } => write!(f, "collapsed while tightening: {initial_length:.5} -> {length:.5}"),
+            DropReason::NotConverged { rounds, length } => {
+                write!(f, "not converged after {rounds} rounds (length {length:.5})")
+            }
+            DropReason::NoMembraneLoop {
+                failure,
+                closed_curves,
+                open_curves,
+                offsets_tried,
+            } => write!(
+                f,
+                "no plane closes around it ({closed_curves} closed, {open_curves} open curves, {offsets_tried} planes tried each side) and its membrane gave no loop ({failure})"
+            ),
+            DropReason::InvalidStrip => write!(f, "the cut is not a strip of an oriented manifold surface"),
+            DropReason::NotSimple { length } => {
+                write!(f, "the tightened loop is not simple (length {length:.5})")
+            }
+            DropReason::TooLong { length, limit } => {
+                write!(f, "too long: {length:.5} > {limit:.5}")
+            }
+            DropReason::NotEssential { length } => write!(
+                f,
+                "cycle-closing but its loop separates the surface: not a handle or tunnel (length {length:.5})"
+            ),
+            DropReason::SameCycle { of: Some(of), length } => {
+                write!(f, "the same cycle as loop {of} (length {length:.5})")
+            }
+            DropReason::SameCycle { of: None, length } => {
+                write!(f, "its class is a sum of kept loops' (length {length:.5})")
+            }
+            DropReason::SameLobe { of, length } => {
+                write!(f, "cuts off the same lobe as seed {of} (length {length:.5})")
+            }
+            DropReason::NotANeck {
+                bulge,
+                opening,
+                flatness,
+                length,
+            } => write!(
+                f,
+                "not a neck: bulge {}, opening {}, flatness {} (length {length:.5})",
+                or_dash(bulge),
+                or_dash(opening),
+                or_dash(flatness)
+            ),
+            DropReason::Duplicate { of, length } => {
+                write!(f, "duplicate of loop {of} (length {length:.5})")
+            }
+        }
+    }
+}
+
 /// A seed that gave no loop, and why.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct DroppedLoop {

@@ -361,6 +361,29 @@ pub enum RejectReason {
     },
 }
 
+impl std::fmt::Display for RejectReason {
+    /// One line for a person, e.g. `short-lived: 2 levels`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            RejectReason::ShortLived { persistence } => {
+                write!(f, "short-lived: {persistence} steps")
+            }
+            RejectReason::HessianSignature {
+                eigenvalues: [a, b, c],
+            } => write!(
+                f,
+                "Hessian signature is not (-, -, +): eigenvalues {a:.3e}, {b:.3e}, {c:.3e}"
+            ),
+            RejectReason::NoFit => write!(f, "no quadratic fit (too few neighbours)"),
+            RejectReason::LocalCycle => write!(f, "closes only a local cycle: lattice noise"),
+            RejectReason::LowBulge { bulge } => {
+                write!(f, "a bump, not a part: bulge {bulge:.3} <= 1")
+            }
+            RejectReason::Duplicate { of } => write!(f, "duplicate of the saddle at vertex {of}"),
+        }
+    }
+}
+
 /// A 2-saddle track that was not selected.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RejectedSaddle {

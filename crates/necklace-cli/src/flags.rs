@@ -1,0 +1,297 @@
+//! The command line: clap's description of every command and flag, and their
+//! translation into library options. No behaviour lives here.
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+use necklace::loops::LoopOptions;
+use necklace::morse::{MorseOptions, Schedule};
+use necklace::pipeline::{Mesher, VolumeOptions};
+
+#[derive(Parser)]
+#[command(
+    name = "necklace",
+    version,
+    about = "Neck loops (handles and tunnels) of closed triangle meshes"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+    /// No progress bars.
+    #[arg(short, long, global = true)]
+    pub quiet: bool,
+    /// Print seconds per stage and side to stderr.
+    #[arg(short, long, global = true)]
+    pub verbose: bool,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Print counts, the validity report and the genus per component of a mesh
+    /// (OBJ, OFF, PLY or STL).
+    Info {
+        /// The mesh file.
+        mesh: PathBuf,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Mesh the volume inside a surface (or, with --exterior, the shell between it and a
+    /// bounding sphere) into tetrahedra.
+    Volume {
+        /// The closed surface mesh.
+        mesh: PathBuf,
+        /// Mesh the outside shell instead of the inside.
+        #[arg(long)]
+        exterior: bool,
+        /// Lattice spacing along the surface (default: bounding-box diagonal / 64).
+        #[arg(long, allow_negative_numbers = true)]
+        h: Option<f64>,
+        /// The most tets the volume mesh may have: a larger run is refused, and thin
+        /// parts are not refined past it.
+        #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS, allow_negative_numbers = true)]
+        max_tets: usize,
+        /// The volume mesher: necklace's isosurface stuffing, or TetGen "pq1.2" (needs a
+        /// build with --features tetgen, which is AGPL-3.0).
+        #[arg(long, value_enum, default_value = "stuffing")]
+        mesher: MesherArg,
+        /// Output tet mesh (.vtu, .mesh, .node or .msh).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Find the critical points of the smoothed distance field inside a surface (or,
+    /// with --exterior, in the shell around it) and the 2-saddles that mark necks.
+    Critical {
+        /// The closed surface mesh.
+        mesh: PathBuf,
+        /// Work in the outside shell (tunnels) instead of the inside (handles).
+        #[arg(long)]
+        exterior: bool,
+        #[command(flatten)]
+        method: MethodArgs,
+        /// Write the critical points at step N (with type, selected, persistence and
+        /// colours) as a PLY point cloud.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Find the neck loops of a closed surface: handles (around narrow parts of the
+    /// solid) and tunnels (around narrow parts of the space around it); both unless one
+    /// is asked for.
+    Loops {
+        /// The closed surface mesh.
+        mesh: PathBuf,
+        /// Find handle loops (inside).
+        #[arg(long)]
+        handles: bool,
+        /// Find tunnel loops (outside).
+        #[arg(long)]
+        tunnels: bool,
+        #[command(flatten)]
+        method: MethodArgs,
+        /// Where the plane through a saddle has no curve around it: parallel planes tried
+        /// on each side, 0.125 % of the diagonal apart.
+        #[arg(long, default_value_t = LoopOptions::default().plane_offsets, allow_negative_numbers = true)]
+        plane_offsets: usize,
+        /// A kept cycle-closing loop is also cut from parallel planes up to this many
+        /// steps (0.5 % of the diagonal) away on each side, and the shortest loop of its
+        /// class wins (0: off).
+        #[arg(long, default_value_t = LoopOptions::default().slide_steps, allow_negative_numbers = true)]
+        slide_steps: usize,
+        /// A separating saddle below --min-bulge is a neck only if the curve one loop
+        /// radius away is at least this much longer than its loop, on both sides
+        /// (0: a cylinder).
+        #[arg(long, default_value_t = LoopOptions::default().min_opening, allow_negative_numbers = true)]
+        min_opening: f64,
+        /// ... and its loop is at most this many times the circumference of the
+        /// inscribed ball at the saddle (larger: a loop round a flat part).
+        #[arg(long, default_value_t = LoopOptions::default().max_flatness, allow_negative_numbers = true)]
+        max_flatness: f64,
+        /// Write loops.obj, loops.ply, loops.json and critical.ply into this folder.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Also write view.png (a picture of the surface and its loops) into the folder.
+        #[arg(long, requires = "output")]
+        png: bool,
+        /// Also write field.vtu (volume meshes with the smoothed field) into the folder.
+        #[arg(long, requires = "output")]
+        volume: bool,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Draw a mesh with loops and saddles from several directions into a PNG.
+    Render {
+        /// The surface mesh.
+        mesh: PathBuf,
+        /// loops.json written by `necklace loops -o DIR`.
+        #[arg(long)]
+        loops: Option<PathBuf>,
+        /// Saddles to draw as dots: the JSON of `necklace critical --json`, or a loops.json.
+        #[arg(long)]
+        critical: Option<PathBuf>,
+        /// Output picture (.png).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Width in pixels.
+        #[arg(long, default_value_t = 1200, allow_negative_numbers = true)]
+        size: u32,
+        /// Number of views: three-quarter, front, side, top (1 to 4).
+        #[arg(long, default_value_t = 4, allow_negative_numbers = true)]
+        views: usize,
+        /// Opacity of the surface over loops and saddles behind it (0 to 1).
+        #[arg(long, default_value_t = 0.7, allow_negative_numbers = true)]
+        opacity: f64,
+    },
+    /// Run the whole method on built-in shapes (a chain of balls, a varying torus, a
+    /// genus-3 pretzel): tables, loops and pictures; no input file needed.
+    Demo {
+        /// Folder for the results (one subfolder per shape).
+        #[arg(short, long, default_value = "necklace-demo")]
+        output: PathBuf,
+    },
+    /// Time every mesh of a folder in both modes (stages named as in the paper's
+    /// Table 1), then a series over the lattice spacing h on one model.
+    Bench {
+        /// Folder of meshes (.obj, .off, .ply, .stl).
+        dir: PathBuf,
+        /// Also write the table as CSV; the h series goes beside it as
+        /// NAME-scaling.csv and NAME-scaling.png.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+        /// Model of the h series (part of its file name; default bunny, else the first).
+        #[arg(long)]
+        scaling: Option<String>,
+        /// Skip the h series.
+        #[arg(long)]
+        no_scaling: bool,
+        /// Smoothing schedule: `scales` (default) or `paper` (20 steps), to compare
+        /// the two in one build.
+        #[arg(long, value_enum, default_value_t = ScheduleArg::Scales)]
+        schedule: ScheduleArg,
+    },
+    /// Generate an analytic test shape with known necks and write it as a mesh.
+    Shape {
+        /// One of `necklace shape --list` (sphere, ellipsoid, capsule, limb, torus,
+        /// varying-torus, dumbbell, chain, satellites, eight, pretzel, buckyball).
+        #[arg(required_unless_present = "list")]
+        name: Option<String>,
+        /// A shape parameter, `name=value` (repeatable); `--list` shows them.
+        #[arg(long = "param", value_name = "K=V", value_parser = parse_param)]
+        params: Vec<(String, f64)>,
+        /// Output file (.obj, .off or .ply).
+        #[arg(short, long, required_unless_present = "list")]
+        output: Option<PathBuf>,
+        /// List the shapes, their parameters and their expected necks.
+        #[arg(long)]
+        list: bool,
+    },
+}
+
+/// The method's settings shared by `critical` and `loops`.
+#[derive(clap::Args)]
+pub struct MethodArgs {
+    /// Smoothing schedule: `scales` classifies over a geometric range of heat times
+    /// (from 2h to a quarter of the diagonal); `paper` takes --steps steps of --tau and
+    /// classifies from step 10 on, as the paper does.
+    #[arg(long, value_enum, default_value_t = ScheduleArg::Scales)]
+    pub schedule: ScheduleArg,
+    /// Scale space: classified levels.
+    #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
+    pub levels: usize,
+    /// Scale space: smallest bulge ratio (the lobe's largest inscribed radius / the
+    /// neck's) of a neck that cuts off a part; a separating saddle below it is a neck
+    /// only if its loop opens out on both sides (`loops --min-opening`).
+    #[arg(long, default_value_t = 1.5, allow_negative_numbers = true)]
+    pub min_bulge: f64,
+    /// Scale space: levels a saddle must live to be a neck.
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
+    pub min_levels: usize,
+    /// Paper schedule: last smoothing step N (classification runs from step 10 to N).
+    #[arg(long, default_value_t = 20, allow_negative_numbers = true)]
+    pub steps: usize,
+    /// Paper schedule: heat time step in units where the bounding box's longest side
+    /// is 1.
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
+    pub tau: f64,
+    /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
+    #[arg(long, allow_negative_numbers = true)]
+    pub h: Option<f64>,
+    /// The most tets a volume mesh may have: a larger run is refused, and thin parts
+    /// are not refined past it.
+    #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS, allow_negative_numbers = true)]
+    pub max_tets: usize,
+    /// The most heat steps (--levels, or --steps with the paper schedule) a run may
+    /// take: more is refused before any work.
+    #[arg(long, default_value_t = necklace::morse::DEFAULT_MAX_STEPS, allow_negative_numbers = true)]
+    pub max_steps: usize,
+}
+
+impl MethodArgs {
+    pub fn volume(&self) -> VolumeOptions {
+        VolumeOptions {
+            h: self.h,
+            max_tets: self.max_tets,
+            ..VolumeOptions::default()
+        }
+    }
+
+    pub fn morse(&self) -> MorseOptions {
+        MorseOptions {
+            schedule: self.schedule.into(),
+            levels: self.levels,
+            min_bulge: self.min_bulge,
+            min_levels: self.min_levels,
+            steps: self.steps,
+            tau: self.tau,
+            max_steps: self.max_steps,
+            ..MorseOptions::default()
+        }
+    }
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ScheduleArg {
+    Scales,
+    Paper,
+}
+
+impl From<ScheduleArg> for Schedule {
+    fn from(s: ScheduleArg) -> Schedule {
+        match s {
+            ScheduleArg::Scales => Schedule::ScaleSpace,
+            ScheduleArg::Paper => Schedule::Paper,
+        }
+    }
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum MesherArg {
+    Stuffing,
+    Tetgen,
+}
+
+pub fn parse_param(s: &str) -> std::result::Result<(String, f64), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected name=value, got '{s}'"))?;
+    let v: f64 = v
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{v}' is not a number"))?;
+    Ok((k.trim().to_string(), v))
+}
+
+impl From<MesherArg> for Mesher {
+    fn from(m: MesherArg) -> Mesher {
+        match m {
+            MesherArg::Stuffing => Mesher::Stuffing,
+            MesherArg::Tetgen => Mesher::Tetgen,
+        }
+    }
+}
