@@ -230,7 +230,10 @@ fn critical(
     let result = pipeline::critical_points(&surface, &volume, options)?;
     print::morse_failures(side, result.morse_failures());
     if let Some(output) = &output {
-        io::write_point_cloud(output, &pipeline::critical_point_cloud(&result))?;
+        io::write_point_cloud(
+            output,
+            &necklace::output::critical_point_cloud(&pipeline::tracked_points(&result)),
+        )?;
     }
     let report = pipeline::CriticalReport {
         side,

@@ -13,7 +13,7 @@
 //! - `loops.json`: the whole report with a `version` field (schema: `docs/output.md`);
 //! - `critical.ply`: every critical point at the last smoothing step of each side, with
 //!   `type`, `selected`, `persistence`, `side` and colours (see
-//!   [`pipeline::critical_point_cloud`](crate::pipeline::critical_point_cloud));
+//!   [`critical_point_cloud`]);
 //! - `view.png` with a picture, and beside it `barcode.png`: one bar per 2-saddle track
 //!   of each side over scale, the necks in their kind's colour; `field.vtu` (volume meshes of both sides with the
 //!   smoothed field and the side per vertex, for ParaView) with the volume kept.
@@ -29,7 +29,8 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::io;
 use crate::loops::LoopKind;
 use crate::mesh::SurfaceMesh;
-use crate::pipeline::{NeckReport, Side};
+use crate::morse::VertexType;
+use crate::pipeline::{NeckReport, Side, TrackedPoint};
 use crate::render::{self, Curve, Dot, RenderOptions, Scene};
 use crate::tet::TetMesh;
 
@@ -347,6 +348,40 @@ fn side_code(side: Side) -> f64 {
     }
 }
 
+/// Critical points as a point cloud: each one's `type` (0 minimum, 1 1-saddle, 2
+/// 2-saddle, 3 maximum, 4 degenerate), `selected` (1 for the selected 2-saddles) and
+/// `persistence` (steps survived); colours blue maxima, red 2-saddles, green
+/// 1-saddles, black the rest, and yellow the selected 2-saddles.
+pub fn critical_point_cloud(points: &[TrackedPoint]) -> io::PointCloud {
+    let mut cloud = io::PointCloud::default();
+    let mut kinds = Vec::new();
+    let mut selected = Vec::new();
+    let mut persistence = Vec::new();
+    let mut colors = Vec::new();
+    for p in points {
+        let (code, color) = match p.kind {
+            VertexType::Minimum => (0.0, [0, 0, 0]),
+            VertexType::Saddle1 => (1.0, [0, 160, 0]),
+            VertexType::Saddle2 if p.selected => (2.0, [255, 210, 0]),
+            VertexType::Saddle2 => (2.0, [220, 0, 0]),
+            VertexType::Maximum => (3.0, [0, 60, 220]),
+            _ => (4.0, [0, 0, 0]),
+        };
+        cloud.positions.push(p.position);
+        kinds.push(code);
+        selected.push(if p.selected { 1.0 } else { 0.0 });
+        persistence.push(p.persistence as f64);
+        colors.push(color);
+    }
+    cloud.scalars = vec![
+        ("type".into(), kinds),
+        ("selected".into(), selected),
+        ("persistence".into(), persistence),
+    ];
+    cloud.colors = Some(colors);
+    cloud
+}
+
 /// The critical points of every side in one cloud, with a `side` field (0 inside,
 /// 1 outside).
 fn critical_cloud(report: &NeckReport) -> io::PointCloud {
@@ -354,7 +389,8 @@ fn critical_cloud(report: &NeckReport) -> io::PointCloud {
     let mut colors = Vec::new();
     let mut sides = Vec::new();
     for s in &report.sides {
-        let c = &s.critical;
+        let c = critical_point_cloud(&s.critical);
+        let c = &c;
         cloud.positions.extend_from_slice(&c.positions);
         for (name, values) in &c.scalars {
             match cloud.scalars.iter_mut().find(|(n, _)| n == name) {

@@ -279,11 +279,7 @@ fn a_run_writes_every_file_with_the_documented_fields() {
     assert!(header.contains("property int loop"));
 
     // critical.ply: every alive critical point of both sides, with a side field.
-    let cloud_points: usize = report
-        .sides
-        .iter()
-        .map(|s| s.critical.positions.len())
-        .sum();
+    let cloud_points: usize = report.sides.iter().map(|s| s.critical.len()).sum();
     let ply = std::fs::read(dir.join("critical.ply")).unwrap();
     let header = String::from_utf8_lossy(&ply[..200.min(ply.len())]).to_string();
     assert!(

@@ -24,12 +24,16 @@
 use std::path::Path;
 
 use super::volume::{crossing_pairs, nesting};
+use super::Side;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
+use crate::geom::{norm, sub};
 use crate::io;
+use crate::loops::Seed;
 use crate::mesh::{
     orient_consistently, remove_unreferenced, MeshReport, SurfaceMesh, MAX_COORDINATE,
 };
+use crate::tet::{TetMesh, VertexKind};
 
 /// A surface accepted as input to the method, with what was done to it.
 #[derive(Debug, Clone)]
@@ -265,6 +269,66 @@ fn flip_components(mesh: &mut SurfaceMesh, which: &[bool]) -> usize {
         }
     }
     which.iter().filter(|&&w| w).count()
+}
+
+// Where the surface crosses itself: which seeds lie there, and the surface their loops
+// are tightened on instead.
+
+/// How many seeds lie near a crossing face: a corner of a crossing triangle within
+/// [`CROSSING_REACH`] times the seed's distance to the surface (its loop's radius,
+/// about), plus the triangle's longest side.
+pub(super) fn seeds_near(surface: &SurfaceMesh, crossing_faces: &[u32], seeds: &[Seed]) -> usize {
+    if crossing_faces.is_empty() || seeds.is_empty() {
+        return 0;
+    }
+    let positions: Vec<[f64; 3]> = seeds.iter().map(|s| s.position).collect();
+    let radii = SurfaceDistance::new(surface).distances(&positions);
+    let crossing: Vec<[[f64; 3]; 3]> = crossing_faces
+        .iter()
+        .map(|&f| surface.corners(f as usize))
+        .collect();
+    positions
+        .iter()
+        .zip(&radii)
+        .filter(|(p, r)| {
+            crossing.iter().any(|t| {
+                // A corner within reach, give or take the triangle's size.
+                let size = (0..3)
+                    .map(|i| norm(sub(t[i], t[(i + 1) % 3])))
+                    .fold(0.0, f64::max);
+                t.iter()
+                    .any(|c| norm(sub(*c, **p)) < CROSSING_REACH * **r + size)
+            })
+        })
+        .count()
+}
+
+/// See [`seeds_near`].
+const CROSSING_REACH: f64 = 4.0;
+
+/// The part of a volume mesh's boundary on the input surface (its surface-kind
+/// faces, not the outer sphere), oriented like the surface (outward from the solid),
+/// without unused vertices.
+pub fn meshed_boundary(mesh: &TetMesh, side: Side) -> SurfaceMesh {
+    let on_surface = |f: &[u32; 3]| {
+        f.iter()
+            .all(|&v| mesh.kinds[v as usize] == VertexKind::Surface)
+    };
+    let triangles = mesh
+        .boundary_faces()
+        .into_iter()
+        .filter(on_surface)
+        .map(|f| match side {
+            Side::Inside => f,
+            // The shell's boundary faces point out of the shell, into the solid.
+            Side::Outside => [f[0], f[2], f[1]],
+        })
+        .collect();
+    let all = SurfaceMesh {
+        positions: mesh.positions.clone(),
+        triangles,
+    };
+    crate::mesh::remove_unreferenced(&all).0
 }
 
 #[cfg(test)]

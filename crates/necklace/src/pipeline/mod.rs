@@ -18,9 +18,11 @@
 //!   through `distance`) and hands it to `morse` for smoothing, classification,
 //!   tracking and saddle selection;
 //! - [`find_necks`] runs the whole method on both sides and hands each side's saddles to
-//!   `loops` (plane cut, tightening, selection), returning a [`NeckReport`].
+//!   `loops` (plane cut, tightening, selection), returning a [`NeckReport`] (its types
+//!   live in submodule `report`; pictures and point clouds of it are `output`'s).
 
 mod input;
+mod report;
 mod volume;
 
 use std::time::Instant;
@@ -29,15 +31,20 @@ use serde::Serialize;
 
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, Result};
-use crate::geom::{norm, sub};
-use crate::io;
-use crate::loops::{self, DropReason, DroppedLoop, LoopKind, LoopOptions, NeckLoop, Role, Seed};
+use crate::loops::{self, DropReason, LoopKind, LoopOptions, NeckLoop, Role, Seed};
 use crate::mesh::{MeshReport, SurfaceMesh};
-use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule, VertexType};
+use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule};
 use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 
-pub use input::{inspect_surface, load_surface, prepare_input, prepare_surface, PreparedSurface};
+use input::seeds_near;
+pub use input::{
+    inspect_surface, load_surface, meshed_boundary, prepare_input, prepare_surface, PreparedSurface,
+};
+pub use report::{
+    tracked_points, CriticalReport, HomologyCheck, MorseCheck, NeckReport, NeckTimings, SideReport,
+    StageTimings, TrackedPoint, VolumeField,
+};
 pub use volume::{
     default_h, expected_topology, volume_mesh, Mesher, TopologyCheck, VolumeOptions, VolumeReport,
     VolumeResult, MAX_ROUNDS,
@@ -91,24 +98,6 @@ pub fn morse_options_for(options: &MorseOptions, volume: &VolumeResult) -> Morse
     options
 }
 
-/// What `necklace critical --json` prints: the volume mesh's summary and the Morse
-/// stage's result, with what the input surface's topology predicts for the Morse sum.
-#[derive(Debug, Clone, Serialize)]
-pub struct CriticalReport<'a> {
-    /// Which side.
-    pub side: Side,
-    /// The volume mesh the field lives on.
-    pub volume: VolumeReport,
-    /// `Σ_i (g_i − 1)` inside, one more outside, over the input surface's components:
-    /// the Morse sum when the volume mesh has the surface's topology (`None` when a
-    /// component's genus is unknown). Each step's `morse_expected` comes from the mesh
-    /// itself; the two differ when the mesher changed the topology (see `volume`).
-    pub surface_morse_expected: Option<i64>,
-    /// Smoothing, per-step counts and checks, selected and rejected 2-saddles.
-    #[serde(flatten)]
-    pub morse: &'a MorseResult,
-}
-
 /// The Morse sum a surface's topology predicts for one side (see
 /// [`CriticalReport::surface_morse_expected`]).
 pub fn surface_morse_expected(report: &MeshReport, side: Side) -> Option<i64> {
@@ -117,42 +106,6 @@ pub fn surface_morse_expected(report: &MeshReport, side: Side) -> Option<i64> {
         sum += component.genus? - 1;
     }
     Some(sum)
-}
-
-/// The critical points of a Morse result as a point cloud: every critical point at the
-/// last step with its `type` (0 minimum, 1 1-saddle, 2 2-saddle, 3 maximum, 4
-/// degenerate), `selected` (1 for the selected 2-saddles) and `persistence` (steps
-/// survived); colours blue maxima, red 2-saddles, green 1-saddles, black the rest, and
-/// yellow the selected 2-saddles.
-pub fn critical_point_cloud(result: &MorseResult) -> io::PointCloud {
-    let mut cloud = io::PointCloud::default();
-    let mut kinds = Vec::new();
-    let mut selected = Vec::new();
-    let mut persistence = Vec::new();
-    let mut colors = Vec::new();
-    for track in result.tracks.iter().filter(|t| t.alive) {
-        let is_selected = result.saddles.iter().any(|s| s.vertex == track.vertex);
-        let (code, color) = match track.kind {
-            VertexType::Minimum => (0.0, [0, 0, 0]),
-            VertexType::Saddle1 => (1.0, [0, 160, 0]),
-            VertexType::Saddle2 if is_selected => (2.0, [255, 210, 0]),
-            VertexType::Saddle2 => (2.0, [220, 0, 0]),
-            VertexType::Maximum => (3.0, [0, 60, 220]),
-            _ => (4.0, [0, 0, 0]),
-        };
-        cloud.positions.push(track.position);
-        kinds.push(code);
-        selected.push(if is_selected { 1.0 } else { 0.0 });
-        persistence.push(track.persistence() as f64);
-        colors.push(color);
-    }
-    cloud.scalars = vec![
-        ("type".into(), kinds),
-        ("selected".into(), selected),
-        ("persistence".into(), persistence),
-    ];
-    cloud.colors = Some(colors);
-    cloud
 }
 
 /// Options of [`find_necks`]: which sides, and each stage's options.
@@ -185,192 +138,6 @@ impl Default for NeckOptions {
             keep_volume: false,
         }
     }
-}
-
-/// Wall-clock seconds per stage of one side.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct StageTimings {
-    /// Volume mesh.
-    pub volume_mesh: f64,
-    /// Exact distance field on its vertices.
-    pub distance: f64,
-    /// Assembly and heat steps.
-    pub smoothing: f64,
-    /// Classification, tracking and the Hessian test.
-    pub critical_points: f64,
-    /// Plane cuts, tightening and selection.
-    pub loops: f64,
-    /// Sum of the above.
-    pub total: f64,
-}
-
-/// The Morse check of one side: every classified step, and whether all held.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct MorseCheck {
-    /// Which side.
-    pub side: Side,
-    /// Whether `morse_sum == morse_expected` at every step.
-    pub ok: bool,
-    /// What the surface's genus predicts (see [`CriticalReport`]).
-    pub surface_morse_expected: Option<i64>,
-    /// The mesh's own expectation (χ of its subcomplexes).
-    pub morse_expected: morse::MorseExpectation,
-    /// Whether the superlevel sweep kept `cycle_rank` essential cycles at every step
-    /// (each step's `cycles_ok`; a cycle closed by a saddle is essential when no
-    /// 1-saddle lower down fills it).
-    pub cycles_ok: bool,
-    /// The first Betti number (Z2) of the complex the sweep covers, from its cocycles:
-    /// the surface's genus when the interior vertices kept its topology (a warning
-    /// says when not).
-    pub cycle_rank: usize,
-    /// Per-step counts and checks.
-    pub steps: Vec<morse::StepSummary>,
-}
-
-/// One side's intermediate results.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SideReport {
-    /// Which side.
-    pub side: Side,
-    /// The volume mesh's summary.
-    pub volume: VolumeReport,
-    /// Interior vertices (unknowns of the heat system).
-    pub unknowns: usize,
-    /// The selected 2-saddles (the loops' seeds, in this order).
-    pub saddles: Vec<morse::Saddle>,
-    /// 2-saddles not selected, with reasons.
-    pub rejected: Vec<morse::RejectedSaddle>,
-    /// Seconds per stage.
-    pub timings: StageTimings,
-    /// The Z2 rank of this side's loops against the surface's genus: on a genus-g
-    /// surface, g independent handle loops and g tunnel loops make a homology basis.
-    pub homology: HomologyCheck,
-    /// Every 2-saddle track over scale (the barcode), with the selected ones marked.
-    pub bars: Vec<morse::Bar>,
-    /// Every critical point alive at the last step, with type, selection and
-    /// persistence (see [`critical_point_cloud`]); not in the JSON.
-    #[serde(skip)]
-    pub critical: io::PointCloud,
-    /// The volume mesh and the smoothed field on it, with
-    /// [`NeckOptions::keep_volume`]; not in the JSON.
-    #[serde(skip)]
-    pub field: Option<VolumeField>,
-}
-
-/// The rank of one side's loop classes against the genus.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct HomologyCheck {
-    /// Total genus of the surface (`None` when a component's is undefined).
-    pub genus: Option<i64>,
-    /// Z2 rank of the classes of this side's loops.
-    pub rank: usize,
-    /// `rank == genus`.
-    pub ok: bool,
-}
-
-/// A volume mesh with a scalar per vertex.
-#[derive(Debug, Clone, PartialEq)]
-pub struct VolumeField {
-    /// The tet mesh.
-    pub mesh: TetMesh,
-    /// One value per vertex.
-    pub values: Vec<f64>,
-}
-
-/// What [`find_necks`] found.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct NeckReport {
-    /// Handle loops, then tunnel loops, each by persistence then length.
-    pub loops: Vec<NeckLoop>,
-    /// Saddles that gave no kept loop, with reasons (`Duplicate::of` indexes `loops`).
-    pub dropped: Vec<DroppedLoop>,
-    /// The Morse check of each side.
-    pub morse: Vec<MorseCheck>,
-    /// Seconds per stage, per side, and the sum over sides.
-    pub timings: NeckTimings,
-    /// Per side: volume mesh, saddles, stage timings.
-    pub sides: Vec<SideReport>,
-    /// Whether any input face was turned round before meshing (an inverted mesh or
-    /// component, faces that disagreed with their neighbours); see `notes`.
-    pub flipped: bool,
-    /// What was done to the input before meshing, one line each ([`prepare_input`]).
-    pub notes: Vec<String>,
-    /// The surface the method worked on: the input as [`prepare_input`] left it
-    /// (unreferenced vertices removed, faces oriented); not in the JSON.
-    #[serde(skip)]
-    pub surface: SurfaceMesh,
-    /// What the caller should know, one line each: what is unusual about the input
-    /// (open, crossing itself, ...), each side's volume warnings (a topology that
-    /// differs from the surface's, a budget that bound, ...).
-    pub warnings: Vec<String>,
-}
-
-/// Stage timings per side and in total.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct NeckTimings {
-    /// Inside (handles), when run.
-    pub handles: Option<StageTimings>,
-    /// Outside (tunnels), when run.
-    pub tunnels: Option<StageTimings>,
-    /// Sum over the sides run.
-    pub total: StageTimings,
-}
-
-/// How many seeds lie near a crossing face: a corner of a crossing triangle within
-/// [`CROSSING_REACH`] times the seed's distance to the surface (its loop's radius,
-/// about), plus the triangle's longest side.
-fn seeds_near(surface: &SurfaceMesh, crossing_faces: &[u32], seeds: &[Seed]) -> usize {
-    if crossing_faces.is_empty() || seeds.is_empty() {
-        return 0;
-    }
-    let positions: Vec<[f64; 3]> = seeds.iter().map(|s| s.position).collect();
-    let radii = SurfaceDistance::new(surface).distances(&positions);
-    let crossing: Vec<[[f64; 3]; 3]> = crossing_faces
-        .iter()
-        .map(|&f| surface.corners(f as usize))
-        .collect();
-    positions
-        .iter()
-        .zip(&radii)
-        .filter(|(p, r)| {
-            crossing.iter().any(|t| {
-                // A corner within reach, give or take the triangle's size.
-                let size = (0..3)
-                    .map(|i| norm(sub(t[i], t[(i + 1) % 3])))
-                    .fold(0.0, f64::max);
-                t.iter()
-                    .any(|c| norm(sub(*c, **p)) < CROSSING_REACH * **r + size)
-            })
-        })
-        .count()
-}
-
-/// See [`seeds_near`].
-const CROSSING_REACH: f64 = 4.0;
-
-/// The part of a volume mesh's boundary on the input surface (its surface-kind
-/// faces, not the outer sphere), oriented like the surface (outward from the solid),
-/// without unused vertices.
-pub fn meshed_boundary(mesh: &TetMesh, side: Side) -> SurfaceMesh {
-    let on_surface = |f: &[u32; 3]| {
-        f.iter()
-            .all(|&v| mesh.kinds[v as usize] == VertexKind::Surface)
-    };
-    let triangles = mesh
-        .boundary_faces()
-        .into_iter()
-        .filter(on_surface)
-        .map(|f| match side {
-            Side::Inside => f,
-            // The shell's boundary faces point out of the shell, into the solid.
-            Side::Outside => [f[0], f[2], f[1]],
-        })
-        .collect();
-    let all = SurfaceMesh {
-        positions: mesh.positions.clone(),
-        triangles,
-    };
-    crate::mesh::remove_unreferenced(&all).0
 }
 
 /// The loop stage's seeds from the Morse stage's selected 2-saddles, in their order:
@@ -584,7 +351,7 @@ pub fn find_necks_with_progress(
             side,
             volume: volume.report(),
             unknowns: result.unknowns,
-            critical: critical_point_cloud(&result),
+            critical: tracked_points(&result),
             saddles: result.saddles,
             rejected: result.rejected,
             timings,

@@ -1,0 +1,189 @@
+//! What a run reports: per side the volume mesh's summary, the Morse check, the saddles
+//! and the loops' homology rank; in all, the loops, the drops with their reasons, the
+//! notes on the input and the warnings, and stage timings. Plain data, built by
+//! [`find_necks`](super::find_necks) and `necklace critical`; `output` writes it.
+
+use serde::Serialize;
+
+use super::{Side, VolumeReport};
+use crate::loops::{DroppedLoop, NeckLoop};
+use crate::mesh::SurfaceMesh;
+use crate::morse::{self, MorseResult, VertexType};
+use crate::tet::TetMesh;
+
+/// What `necklace critical --json` prints: the volume mesh's summary and the Morse
+/// stage's result, with what the input surface's topology predicts for the Morse sum.
+#[derive(Debug, Clone, Serialize)]
+pub struct CriticalReport<'a> {
+    /// Which side.
+    pub side: Side,
+    /// The volume mesh the field lives on.
+    pub volume: VolumeReport,
+    /// `Σ_i (g_i − 1)` inside, one more outside, over the input surface's components:
+    /// the Morse sum when the volume mesh has the surface's topology (`None` when a
+    /// component's genus is unknown). Each step's `morse_expected` comes from the mesh
+    /// itself; the two differ when the mesher changed the topology (see `volume`).
+    pub surface_morse_expected: Option<i64>,
+    /// Smoothing, per-step counts and checks, selected and rejected 2-saddles.
+    #[serde(flatten)]
+    pub morse: &'a MorseResult,
+}
+
+/// A critical point alive at the last level of a run, as the report keeps it (the
+/// picture and `critical.ply` are drawn from these by `output`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TrackedPoint {
+    /// Where it is at the last level.
+    pub position: [f64; 3],
+    /// Its type there.
+    pub kind: VertexType,
+    /// Whether it is one of the selected neck 2-saddles.
+    pub selected: bool,
+    /// Levels (steps) it lived.
+    pub persistence: usize,
+}
+
+/// Every critical point alive at the last level of `result`, with its type, whether it
+/// was selected and its persistence.
+pub fn tracked_points(result: &MorseResult) -> Vec<TrackedPoint> {
+    result
+        .tracks
+        .iter()
+        .filter(|t| t.alive)
+        .map(|track| TrackedPoint {
+            position: track.position,
+            kind: track.kind,
+            selected: result.saddles.iter().any(|s| s.vertex == track.vertex),
+            persistence: track.persistence(),
+        })
+        .collect()
+}
+
+/// Wall-clock seconds per stage of one side.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StageTimings {
+    /// Volume mesh.
+    pub volume_mesh: f64,
+    /// Exact distance field on its vertices.
+    pub distance: f64,
+    /// Assembly and heat steps.
+    pub smoothing: f64,
+    /// Classification, tracking and the Hessian test.
+    pub critical_points: f64,
+    /// Plane cuts, tightening and selection.
+    pub loops: f64,
+    /// Sum of the above.
+    pub total: f64,
+}
+
+/// The Morse check of one side: every classified step, and whether all held.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MorseCheck {
+    /// Which side.
+    pub side: Side,
+    /// Whether `morse_sum == morse_expected` at every step.
+    pub ok: bool,
+    /// What the surface's genus predicts (see [`CriticalReport`]).
+    pub surface_morse_expected: Option<i64>,
+    /// The mesh's own expectation (χ of its subcomplexes).
+    pub morse_expected: morse::MorseExpectation,
+    /// Whether the superlevel sweep kept `cycle_rank` essential cycles at every step
+    /// (each step's `cycles_ok`; a cycle closed by a saddle is essential when no
+    /// 1-saddle lower down fills it).
+    pub cycles_ok: bool,
+    /// The first Betti number (Z2) of the complex the sweep covers, from its cocycles:
+    /// the surface's genus when the interior vertices kept its topology (a warning
+    /// says when not).
+    pub cycle_rank: usize,
+    /// Per-step counts and checks.
+    pub steps: Vec<morse::StepSummary>,
+}
+
+/// One side's intermediate results.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SideReport {
+    /// Which side.
+    pub side: Side,
+    /// The volume mesh's summary.
+    pub volume: VolumeReport,
+    /// Interior vertices (unknowns of the heat system).
+    pub unknowns: usize,
+    /// The selected 2-saddles (the loops' seeds, in this order).
+    pub saddles: Vec<morse::Saddle>,
+    /// 2-saddles not selected, with reasons.
+    pub rejected: Vec<morse::RejectedSaddle>,
+    /// Seconds per stage.
+    pub timings: StageTimings,
+    /// The Z2 rank of this side's loops against the surface's genus: on a genus-g
+    /// surface, g independent handle loops and g tunnel loops make a homology basis.
+    pub homology: HomologyCheck,
+    /// Every 2-saddle track over scale (the barcode), with the selected ones marked.
+    pub bars: Vec<morse::Bar>,
+    /// Every critical point alive at the last step, with type, selection and
+    /// persistence ([`tracked_points`]); not in the JSON.
+    #[serde(skip)]
+    pub critical: Vec<TrackedPoint>,
+    /// The volume mesh and the smoothed field on it, with
+    /// [`NeckOptions::keep_volume`](super::NeckOptions::keep_volume); not in the JSON.
+    #[serde(skip)]
+    pub field: Option<VolumeField>,
+}
+
+/// The rank of one side's loop classes against the genus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct HomologyCheck {
+    /// Total genus of the surface (`None` when a component's is undefined).
+    pub genus: Option<i64>,
+    /// Z2 rank of the classes of this side's loops.
+    pub rank: usize,
+    /// `rank == genus`.
+    pub ok: bool,
+}
+
+/// A volume mesh with a scalar per vertex.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VolumeField {
+    /// The tet mesh.
+    pub mesh: TetMesh,
+    /// One value per vertex.
+    pub values: Vec<f64>,
+}
+
+/// What [`find_necks`](super::find_necks) found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NeckReport {
+    /// Handle loops, then tunnel loops, each by persistence then length.
+    pub loops: Vec<NeckLoop>,
+    /// Saddles that gave no kept loop, with reasons (`Duplicate::of` indexes `loops`).
+    pub dropped: Vec<DroppedLoop>,
+    /// The Morse check of each side.
+    pub morse: Vec<MorseCheck>,
+    /// Seconds per stage, per side, and the sum over sides.
+    pub timings: NeckTimings,
+    /// Per side: volume mesh, saddles, stage timings.
+    pub sides: Vec<SideReport>,
+    /// Whether any input face was turned round before meshing (an inverted mesh or
+    /// component, faces that disagreed with their neighbours); see `notes`.
+    pub flipped: bool,
+    /// What was done to the input before meshing, one line each ([`prepare_input`](super::prepare_input)).
+    pub notes: Vec<String>,
+    /// The surface the method worked on: the input as [`prepare_input`](super::prepare_input) left it
+    /// (unreferenced vertices removed, faces oriented); not in the JSON.
+    #[serde(skip)]
+    pub surface: SurfaceMesh,
+    /// What the caller should know, one line each: what is unusual about the input
+    /// (open, crossing itself, ...), each side's volume warnings (a topology that
+    /// differs from the surface's, a budget that bound, ...).
+    pub warnings: Vec<String>,
+}
+
+/// Stage timings per side and in total.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct NeckTimings {
+    /// Inside (handles), when run.
+    pub handles: Option<StageTimings>,
+    /// Outside (tunnels), when run.
+    pub tunnels: Option<StageTimings>,
+    /// Sum over the sides run.
+    pub total: StageTimings,
+}
