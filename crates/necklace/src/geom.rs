@@ -152,3 +152,50 @@ pub fn closest_on_segment(p: [f64; 3], u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
     let t = (dot(sub(p, u), e) / ee).clamp(0.0, 1.0);
     add(u, scale(e, t))
 }
+
+/// The root of `f` on `[0, 1]`, where `f(0) = f0` and `f(1) = f1` have opposite signs:
+/// regula falsi with the Illinois rule (the value kept at a bracket end twice in a row is
+/// halved, so the bracket shrinks from both sides). Stops when `|f(t)| <= tol`, when the
+/// bracket is narrower than `width`, or after `steps` evaluations; returns the last `t`
+/// evaluated (0.5 if none).
+pub fn illinois_root(
+    mut f: impl FnMut(f64) -> f64,
+    f0: f64,
+    f1: f64,
+    tol: f64,
+    width: f64,
+    steps: usize,
+) -> f64 {
+    let (mut lo, mut hi, mut flo, mut fhi) = (0.0f64, 1.0f64, f0, f1);
+    let mut side = 0i8;
+    let mut t = 0.5;
+    for _ in 0..steps {
+        t = (lo * fhi - hi * flo) / (fhi - flo);
+        if !(t > lo && t < hi) {
+            t = 0.5 * (lo + hi);
+        }
+        let ft = f(t);
+        if ft.abs() <= tol {
+            break;
+        }
+        if (ft < 0.0) == (flo < 0.0) {
+            lo = t;
+            flo = ft;
+            if side == -1 {
+                fhi *= 0.5;
+            }
+            side = -1;
+        } else {
+            hi = t;
+            fhi = ft;
+            if side == 1 {
+                flo *= 0.5;
+            }
+            side = 1;
+        }
+        if hi - lo < width {
+            break;
+        }
+    }
+    t
+}

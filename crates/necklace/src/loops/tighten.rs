@@ -30,8 +30,15 @@ use std::f64::consts::PI;
 use serde::Serialize;
 
 use super::cut::Crossing;
-use crate::geom::{dot, lerp, norm, sub};
+use crate::geom::{dot, illinois_root, lerp, norm, sub};
 use crate::mesh::{SurfaceMesh, Topology};
+
+/// The anchor search stops when its bracket of the strip parameter is narrower than
+/// this.
+const SLOPE_BRACKET: f64 = 1e-13;
+
+/// Most evaluations of the anchor search.
+const SLOPE_STEPS: usize = 100;
 
 /// Options of [`tighten`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -618,38 +625,7 @@ fn shortest_closed_path(geometry: &SurfaceGeometry, strip: &mut Strip) -> Option
     } else if s1 <= 0.0 {
         1.0
     } else {
-        let (mut lo, mut hi, mut flo, mut fhi) = (0.0, 1.0, s0, s1);
-        let mut side = 0;
-        let mut t = 0.5;
-        for _ in 0..100 {
-            t = (lo * fhi - hi * flo) / (fhi - flo);
-            if !(t > lo && t < hi) {
-                t = 0.5 * (lo + hi);
-            }
-            let (_, _, ft) = eval(t);
-            if ft == 0.0 {
-                break;
-            }
-            if ft < 0.0 {
-                lo = t;
-                flo = ft;
-                if side == -1 {
-                    fhi *= 0.5;
-                }
-                side = -1;
-            } else {
-                hi = t;
-                fhi = ft;
-                if side == 1 {
-                    flo *= 0.5;
-                }
-                side = 1;
-            }
-            if hi - lo < 1e-13 {
-                break;
-            }
-        }
-        t
+        illinois_root(|t| eval(t).2, s0, s1, 0.0, SLOPE_BRACKET, SLOPE_STEPS)
     };
     let (path, length, _) = eval(t);
     // Crossings of every portal, anchor first (index k ↔ strip portal (anchor + k) % n).

@@ -24,7 +24,7 @@
 use rayon::prelude::*;
 
 use super::csr::Csr;
-use crate::geom::{cross, dot, lerp, norm, sub};
+use crate::geom::{cross, dot, illinois_root, lerp, norm, sub};
 
 /// Edge-length fractions below which a cut point warps a vertex (the paper's values for
 /// dihedral angles between 10.7° and 164.8°).
@@ -327,34 +327,6 @@ fn root_on_edge(
     fb: f64,
 ) -> f64 {
     let tol = 1e-9 * norm(sub(b, a));
-    let (mut lo, mut hi) = (0.0f64, 1.0f64);
-    let (mut flo, mut fhi) = (fa, fb);
-    let mut side = 0i8;
-    let mut t = 0.5;
-    for _ in 0..ROOT_STEPS {
-        t = (lo * fhi - hi * flo) / (fhi - flo);
-        if !(t > lo && t < hi) {
-            t = 0.5 * (lo + hi);
-        }
-        let f = value(lerp(a, b, t));
-        if f.abs() <= tol {
-            break;
-        }
-        if (f < 0.0) == (flo < 0.0) {
-            lo = t;
-            flo = f;
-            if side == -1 {
-                fhi *= 0.5;
-            }
-            side = -1;
-        } else {
-            hi = t;
-            fhi = f;
-            if side == 1 {
-                flo *= 0.5;
-            }
-            side = 1;
-        }
-    }
+    let t = illinois_root(|t| value(lerp(a, b, t)), fa, fb, tol, 0.0, ROOT_STEPS);
     t.clamp(1e-6, 1.0 - 1e-6)
 }
