@@ -329,7 +329,6 @@ impl TetMesh {
     /// The mesh made of the tets with `keep[t]`, without the vertices no kept tet uses
     /// (vertex order otherwise kept).
     pub fn retain_tets(&self, keep: &[bool]) -> TetMesh {
-        let mut new_id = vec![u32::MAX; self.num_vertices()];
         let tets: Vec<[u32; 4]> = self
             .tets
             .iter()
@@ -337,20 +336,9 @@ impl TetMesh {
             .filter(|(_, &k)| k)
             .map(|(t, _)| *t)
             .collect();
-        for t in &tets {
-            for &v in t {
-                new_id[v as usize] = 0;
-            }
-        }
-        let mut positions = Vec::new();
-        let mut kinds = Vec::new();
-        for (v, id) in new_id.iter_mut().enumerate() {
-            if *id == 0 {
-                *id = positions.len() as u32;
-                positions.push(self.positions[v]);
-                kinds.push(self.kinds[v]);
-            }
-        }
+        let (new_id, used) = renumber_used(self.num_vertices(), &tets);
+        let positions = used.iter().map(|&v| self.positions[v as usize]).collect();
+        let kinds = used.iter().map(|&v| self.kinds[v as usize]).collect();
         let tets = tets.iter().map(|t| t.map(|v| new_id[v as usize])).collect();
         // Indices are remapped from a valid mesh, so construction cannot fail.
         TetMesh::new(positions, tets, kinds).unwrap_or_else(|_| unreachable!())
@@ -541,6 +529,25 @@ pub fn dihedral_angles_deg(p: [[f64; 3]; 4]) -> [f64; 6] {
         }
         (dot(n1, n2) / (a * b)).clamp(-1.0, 1.0).acos().to_degrees()
     })
+}
+
+/// The renumbering that drops the vertices no tet uses: each old vertex's new index
+/// (`u32::MAX` where unused) and the old index of each kept vertex, in index order.
+pub fn renumber_used(num_vertices: usize, tets: &[[u32; 4]]) -> (Vec<u32>, Vec<u32>) {
+    let mut new_id = vec![u32::MAX; num_vertices];
+    for t in tets {
+        for &v in t {
+            new_id[v as usize] = 0;
+        }
+    }
+    let mut used = Vec::new();
+    for (v, id) in new_id.iter_mut().enumerate() {
+        if *id == 0 {
+            *id = used.len() as u32;
+            used.push(v as u32);
+        }
+    }
+    (new_id, used)
 }
 
 /// The faces used by exactly one of `tets` (positively oriented), oriented outward,

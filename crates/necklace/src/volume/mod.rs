@@ -57,7 +57,7 @@ use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{norm, scale, sub};
-use crate::tet::{TetMesh, VertexKind};
+use crate::tet::{renumber_used, TetMesh, VertexKind};
 pub use features::SharpFeatures;
 use octree::{Cell, Key, Octree};
 pub use quality::QualityStats;
@@ -791,26 +791,18 @@ fn compact(
     tets: &[[u32; 4]],
     interior: &[bool],
 ) -> Result<TetMesh> {
-    let mut new_id = vec![u32::MAX; positions.len()];
-    for t in tets {
-        for &v in t {
-            new_id[v as usize] = 0;
-        }
-    }
-    let mut out_positions = Vec::new();
-    let mut kinds = Vec::new();
-    for (v, id) in new_id.iter_mut().enumerate() {
-        if *id == 0 {
-            *id = out_positions.len() as u32;
-            let p = positions[v];
-            out_positions.push(p);
-            kinds.push(if interior[v] {
+    let (new_id, used) = renumber_used(positions.len(), tets);
+    let out_positions: Vec<[f64; 3]> = used.iter().map(|&v| positions[v as usize]).collect();
+    let kinds = used
+        .iter()
+        .map(|&v| {
+            if interior[v as usize] {
                 VertexKind::Interior
             } else {
-                domain.boundary_kind(p)
-            });
-        }
-    }
+                domain.boundary_kind(positions[v as usize])
+            }
+        })
+        .collect();
     let tets: Vec<[u32; 4]> = tets.iter().map(|t| t.map(|v| new_id[v as usize])).collect();
     TetMesh::new(out_positions, tets, kinds)
 }
