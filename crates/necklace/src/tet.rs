@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{cross, dot, norm, sub};
-use crate::mesh::{check_finite, find, union};
+use crate::mesh::{check_finite, find, union, Csr};
 
 /// Where a vertex of a tet mesh lies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -40,8 +40,7 @@ pub struct TetMesh {
     pub tets: Vec<[u32; 4]>,
     /// Kind of each vertex.
     pub kinds: Vec<VertexKind>,
-    vertex_tet_start: Vec<u32>,
-    vertex_tets: Vec<u32>,
+    vertex_tets: Csr,
 }
 
 impl TetMesh {
@@ -68,28 +67,16 @@ impl TetMesh {
                 ));
             }
         }
-        let mut start = vec![0u32; n + 1];
-        for tet in &tets {
-            for &v in tet {
-                start[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..n {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut vertex_tets = vec![0u32; 4 * tets.len()];
-        for (t, tet) in tets.iter().enumerate() {
-            for &v in tet {
-                vertex_tets[fill[v as usize] as usize] = t as u32;
-                fill[v as usize] += 1;
-            }
-        }
+        let vertex_tets = Csr::new(
+            n,
+            tets.iter()
+                .enumerate()
+                .flat_map(|(t, tet)| tet.map(|v| (v, t as u32))),
+        );
         Ok(TetMesh {
             positions,
             tets,
             kinds,
-            vertex_tet_start: start,
             vertex_tets,
         })
     }
@@ -106,8 +93,7 @@ impl TetMesh {
 
     /// The tets that use vertex `v`.
     pub fn vertex_tets(&self, v: usize) -> &[u32] {
-        let (s, e) = (self.vertex_tet_start[v], self.vertex_tet_start[v + 1]);
-        &self.vertex_tets[s as usize..e as usize]
+        self.vertex_tets.get(v)
     }
 
     /// Number of vertices of each kind: (interior, surface, outer).
@@ -367,8 +353,7 @@ impl TetMesh {
             positions: positions.to_vec(),
             tets: tets.to_vec(),
             kinds: kinds.clone(),
-            vertex_tet_start: Vec::new(),
-            vertex_tets: Vec::new(),
+            vertex_tets: Csr::default(),
         };
         let faces = mesh.boundary_faces();
         // Components of the boundary surface, by union-find over face corners.

@@ -21,11 +21,13 @@
 //!   only for manifold, oriented components.
 //! - The signed volume (divergence theorem) is positive for an outward-oriented closed mesh.
 
+mod csr;
 mod homology;
 mod repair;
 mod report;
 mod topology;
 
+pub use csr::Csr;
 pub use homology::{z2_rank, HomologyBasis, Z2Basis};
 pub use repair::{orient_consistently, remove_unreferenced, Reorientation};
 pub use report::{ComponentReport, MeshReport, MAX_COORDINATE};

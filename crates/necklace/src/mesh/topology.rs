@@ -1,6 +1,6 @@
 //! Edge and vertex adjacency of a [`SurfaceMesh`], built once on demand.
 
-use super::SurfaceMesh;
+use super::{Csr, SurfaceMesh};
 
 /// Adjacency of a triangle mesh: unique undirected edges with their incident faces,
 /// the edges of each face, and the faces and edges around each vertex (all in CSR
@@ -15,10 +15,8 @@ pub struct Topology {
     edge_face_start: Vec<u32>,
     edge_faces: Vec<u32>,
     face_edges: Vec<[u32; 3]>,
-    vertex_face_start: Vec<u32>,
-    vertex_faces: Vec<u32>,
-    vertex_edge_start: Vec<u32>,
-    vertex_edges: Vec<u32>,
+    vertex_faces: Csr,
+    vertex_edges: Csr,
 }
 
 const NO_EDGE: u32 = u32::MAX;
@@ -59,41 +57,21 @@ impl Topology {
         }
 
         // Vertex -> faces, by counting sort.
-        let mut vertex_face_start = vec![0u32; nv + 1];
-        for t in &mesh.triangles {
-            for &v in t {
-                vertex_face_start[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..nv {
-            vertex_face_start[v + 1] += vertex_face_start[v];
-        }
-        let mut fill = vertex_face_start.clone();
-        let mut vertex_faces = vec![0u32; 3 * mesh.num_triangles()];
-        for (f, t) in mesh.triangles.iter().enumerate() {
-            for &v in t {
-                vertex_faces[fill[v as usize] as usize] = f as u32;
-                fill[v as usize] += 1;
-            }
-        }
-
+        let vertex_faces = Csr::new(
+            nv,
+            mesh.triangles
+                .iter()
+                .enumerate()
+                .flat_map(|(f, t)| t.map(|v| (v, f as u32))),
+        );
         // Vertex -> edges, in edge order.
-        let mut vertex_edge_start = vec![0u32; nv + 1];
-        for e in &edges {
-            vertex_edge_start[e[0] as usize + 1] += 1;
-            vertex_edge_start[e[1] as usize + 1] += 1;
-        }
-        for v in 0..nv {
-            vertex_edge_start[v + 1] += vertex_edge_start[v];
-        }
-        let mut fill = vertex_edge_start.clone();
-        let mut vertex_edges = vec![0u32; 2 * edges.len()];
-        for (i, e) in edges.iter().enumerate() {
-            for &v in e {
-                vertex_edges[fill[v as usize] as usize] = i as u32;
-                fill[v as usize] += 1;
-            }
-        }
+        let vertex_edges = Csr::new(
+            nv,
+            edges
+                .iter()
+                .enumerate()
+                .flat_map(|(i, e)| e.map(|v| (v, i as u32))),
+        );
 
         Topology {
             num_vertices: nv,
@@ -101,9 +79,7 @@ impl Topology {
             edge_face_start,
             edge_faces,
             face_edges,
-            vertex_face_start,
             vertex_faces,
-            vertex_edge_start,
             vertex_edges,
         }
     }
@@ -144,14 +120,12 @@ impl Topology {
 
     /// Faces incident to vertex `v` (a face appears once per corner at `v`).
     pub fn vertex_faces(&self, v: usize) -> &[u32] {
-        let (s, t) = (self.vertex_face_start[v], self.vertex_face_start[v + 1]);
-        &self.vertex_faces[s as usize..t as usize]
+        self.vertex_faces.get(v)
     }
 
     /// Edges at vertex `v`, in edge order.
     pub fn vertex_edges(&self, v: usize) -> &[u32] {
-        let (s, t) = (self.vertex_edge_start[v], self.vertex_edge_start[v + 1]);
-        &self.vertex_edges[s as usize..t as usize]
+        self.vertex_edges.get(v)
     }
 
     /// Edges with exactly one incident face.

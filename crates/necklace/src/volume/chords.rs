@@ -18,8 +18,8 @@
 
 use std::collections::HashMap;
 
-use super::csr::Csr;
 use super::repair::{faces_of, runs};
+use crate::mesh::Csr;
 
 /// Split every chord of `tets` (see the module doc); `interior[v]` says which vertices
 /// are strictly inside and grows with the new midpoints. Returns how many were split.

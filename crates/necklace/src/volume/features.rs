@@ -15,9 +15,9 @@
 //!
 //! Entry point: [`snap`]; lengths in the domain's units.
 
-use super::csr::Csr;
 use crate::distance::SurfaceDistance;
 use crate::geom::{norm, sub};
+use crate::mesh::Csr;
 use crate::mesh::SurfaceMesh;
 
 /// Corners and creases of a domain's boundary that the mesh should reproduce.

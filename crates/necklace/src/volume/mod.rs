@@ -42,7 +42,6 @@
 
 mod background;
 mod chords;
-mod csr;
 mod features;
 mod octree;
 mod quality;

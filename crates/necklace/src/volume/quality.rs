@@ -17,8 +17,8 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::csr::Csr;
 use crate::geom::{add, cross, dot, norm, plane_basis, scale, sub};
+use crate::mesh::Csr;
 use crate::tet::boundary_faces_of;
 
 /// How a vertex may move.

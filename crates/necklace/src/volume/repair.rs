@@ -13,8 +13,8 @@
 
 use rayon::prelude::*;
 
-use super::csr::Csr;
 use crate::geom::{cross, dot, sub};
+use crate::mesh::Csr;
 
 /// What the repair changed.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

@@ -23,8 +23,8 @@
 
 use rayon::prelude::*;
 
-use super::csr::Csr;
 use crate::geom::{cross, dot, illinois_root, lerp, norm, sub};
+use crate::mesh::Csr;
 
 /// Edge-length fractions below which a cut point warps a vertex (the paper's values for
 /// dihedral angles between 10.7° and 164.8°).
