@@ -217,46 +217,30 @@ fn critical(
         io::check_point_cloud_name(output)?;
         check_output_file(output)?;
     }
-    options.check()?;
-    let surface = read_prepared(&path)?;
-    let surface_report = MeshReport::new(&surface);
     let side = if exterior {
         Side::Outside
     } else {
         Side::Inside
     };
-    let volume = pipeline::volume_mesh(&surface, side, volume_options)?;
-    print::warn(&volume.warnings);
-    let result = pipeline::critical_points(&surface, &volume, options)?;
-    print::morse_failures(side, result.morse_failures());
+    let run = pipeline::find_critical_points(io::read_mesh(&path)?, side, volume_options, options)
+        .map_err(|e| e.in_file(&path))?;
+    print::note(&path, &run.prepared.notes);
+    print::warn(&run.prepared.warnings);
+    print::warn(&run.volume.warnings);
+    print::morse_failures(side, run.result.morse_failures());
     if let Some(output) = &output {
-        io::write_point_cloud(
-            output,
-            &necklace::output::critical_point_cloud(&pipeline::tracked_points(&result)),
-        )?;
+        let points = pipeline::tracked_points(&run.result);
+        io::write_point_cloud(output, &necklace::output::critical_point_cloud(&points))?;
     }
-    let report = pipeline::CriticalReport {
-        side,
-        volume: volume.report(),
-        surface_morse_expected: pipeline::surface_morse_expected(&surface_report, side),
-        morse: &result,
-    };
-    if let Some(expected) = report.surface_morse_expected {
-        let mesh = result.morse_expected;
-        if expected != mesh.sum {
-            eprintln!(
-                "necklace: note: the surface's genus predicts a Morse sum of {expected}, the volume mesh's topology {}: chi of its surface part {}, of all but the outer sphere {} (thin parts without interior vertices, or sub-resolution features; --h smaller may help)",
-                mesh.sum, mesh.surface_part_euler, mesh.inner_part_euler
-            );
-        }
-    }
+    let report = run.report();
+    print::morse_sum_note(report.surface_morse_expected, &run.result);
     if json {
         return Ok(serde_json::to_string_pretty(&report)? + "\n");
     }
     Ok(print::critical_text(
         &path,
         side,
-        &result,
+        &run.result,
         output.as_deref(),
     ))
 }

@@ -98,6 +98,18 @@ pub fn loops_table(report: &NeckReport) -> Result<String> {
     Ok(out)
 }
 
+/// The note when the surface's genus and the volume mesh's topology predict different
+/// Morse sums.
+pub fn morse_sum_note(surface_expected: Option<i64>, result: &MorseResult) {
+    let mesh = result.morse_expected;
+    if let Some(expected) = surface_expected.filter(|&e| e != mesh.sum) {
+        eprintln!(
+            "necklace: note: the surface's genus predicts a Morse sum of {expected}, the volume mesh's topology {}: chi of its surface part {}, of all but the outer sphere {} (thin parts without interior vertices, or sub-resolution features; --h smaller may help)",
+            mesh.sum, mesh.surface_part_euler, mesh.inner_part_euler
+        );
+    }
+}
+
 /// The text `necklace critical` prints.
 pub fn critical_text(
     path: &Path,

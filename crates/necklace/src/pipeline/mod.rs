@@ -14,13 +14,15 @@
 //!   `volume::Domain`, sizes the lattice to resolve thin parts and gaps, calls the
 //!   stuffing mesher (`volume`) and checks the mesh's topology against the surface's,
 //!   refining where they differ;
-//! - [`critical_points`] computes the distance field on that mesh ([`distance_field`],
-//!   through `distance`) and hands it to `morse` for smoothing, classification,
-//!   tracking and saddle selection;
+//! - [`critical_points`] (submodule `critical`) computes the distance field on that
+//!   mesh ([`distance_field`], through `distance`) and hands it to `morse` for
+//!   smoothing, classification, tracking and saddle selection; [`find_critical_points`]
+//!   is one side from the raw input to its saddles (`necklace critical`);
 //! - [`find_necks`] runs the whole method on both sides and hands each side's saddles to
 //!   `loops` (plane cut, tightening, selection), returning a [`NeckReport`] (its types
 //!   live in submodule `report`; pictures and point clouds of it are `output`'s).
 
+mod critical;
 mod input;
 mod report;
 mod volume;
@@ -37,13 +39,17 @@ use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule};
 use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 
+pub use critical::{
+    critical_points, find_critical_points, morse_options_for, surface_morse_expected,
+    CriticalReport, CriticalRun,
+};
 use input::seeds_near;
 pub use input::{
     inspect_surface, load_surface, meshed_boundary, prepare_input, prepare_surface, PreparedSurface,
 };
 pub use report::{
-    tracked_points, CriticalReport, HomologyCheck, MorseCheck, NeckReport, NeckTimings, SideReport,
-    StageTimings, TrackedPoint, VolumeField,
+    tracked_points, HomologyCheck, MorseCheck, NeckReport, NeckTimings, SideReport, StageTimings,
+    TrackedPoint, VolumeField,
 };
 pub use volume::{
     default_h, expected_topology, volume_mesh, Mesher, TopologyCheck, VolumeOptions, VolumeReport,
@@ -74,38 +80,6 @@ pub fn distance_field(surface: &SurfaceMesh, mesh: &TetMesh) -> Vec<f64> {
         }
     }
     f
-}
-
-/// The critical points of one side: the distance field of `volume`'s mesh to
-/// `surface`, smoothed, classified, tracked, and its neck 2-saddles selected
-/// (`morse::analyze`).
-pub fn critical_points(
-    surface: &SurfaceMesh,
-    volume: &VolumeResult,
-    options: &MorseOptions,
-) -> Result<MorseResult> {
-    let field = distance_field(surface, &volume.mesh);
-    morse::analyze(&volume.mesh, &field, &morse_options_for(options, volume))
-}
-
-/// The Morse options for one volume mesh: the scale space starts at twice its lattice
-/// spacing unless the caller chose a smallest scale.
-pub fn morse_options_for(options: &MorseOptions, volume: &VolumeResult) -> MorseOptions {
-    let mut options = *options;
-    if options.min_scale.is_none() {
-        options.min_scale = Some(2.0 * volume.h);
-    }
-    options
-}
-
-/// The Morse sum a surface's topology predicts for one side (see
-/// [`CriticalReport::surface_morse_expected`]).
-pub fn surface_morse_expected(report: &MeshReport, side: Side) -> Option<i64> {
-    let mut sum = i64::from(side == Side::Outside);
-    for component in &report.component_details {
-        sum += component.genus? - 1;
-    }
-    Some(sum)
 }
 
 /// Options of [`find_necks`]: which sides, and each stage's options.

@@ -11,24 +11,6 @@ use crate::mesh::SurfaceMesh;
 use crate::morse::{self, MorseResult, VertexType};
 use crate::tet::TetMesh;
 
-/// What `necklace critical --json` prints: the volume mesh's summary and the Morse
-/// stage's result, with what the input surface's topology predicts for the Morse sum.
-#[derive(Debug, Clone, Serialize)]
-pub struct CriticalReport<'a> {
-    /// Which side.
-    pub side: Side,
-    /// The volume mesh the field lives on.
-    pub volume: VolumeReport,
-    /// `Σ_i (g_i − 1)` inside, one more outside, over the input surface's components:
-    /// the Morse sum when the volume mesh has the surface's topology (`None` when a
-    /// component's genus is unknown). Each step's `morse_expected` comes from the mesh
-    /// itself; the two differ when the mesher changed the topology (see `volume`).
-    pub surface_morse_expected: Option<i64>,
-    /// Smoothing, per-step counts and checks, selected and rejected 2-saddles.
-    #[serde(flatten)]
-    pub morse: &'a MorseResult,
-}
-
 /// A critical point alive at the last level of a run, as the report keeps it (the
 /// picture and `critical.ply` are drawn from these by `output`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -83,7 +65,7 @@ pub struct MorseCheck {
     pub side: Side,
     /// Whether `morse_sum == morse_expected` at every step.
     pub ok: bool,
-    /// What the surface's genus predicts (see [`CriticalReport`]).
+    /// What the surface's genus predicts (see [`CriticalReport`](super::CriticalReport)).
     pub surface_morse_expected: Option<i64>,
     /// The mesh's own expectation (χ of its subcomplexes).
     pub morse_expected: morse::MorseExpectation,
