@@ -193,19 +193,23 @@ pub fn find_necks_with_progress(
             Side::Inside => "inside",
             Side::Outside => "outside",
         };
+        // 2. The volume mesh of this side.
         progress.start(&format!("volume mesh ({name})"), 0);
         let volume = volume_mesh(surface, side, &options.volume);
         progress.finish();
         let volume = volume?;
         report.warnings.extend(volume.warnings.iter().cloned());
+        // 3. The exact distance to the surface on its vertices.
         progress.start(&format!("distance ({name})"), 0);
         let start = Instant::now();
         let field = distance_field(surface, &volume.mesh);
         let distance_seconds = start.elapsed().as_secs_f64();
         progress.finish();
+        // 4. Smoothing over scale, critical points, the neck 2-saddles.
         let morse_options = morse_options_for(&options.morse, &volume);
         let result = morse::analyze_with_progress(&volume.mesh, &field, &morse_options, progress)?;
-        // The paper's schedule reproduces the paper's selection: no homology step.
+        // 5. A loop per saddle: cut, tightened, selected. The paper's schedule
+        // reproduces the paper's selection: no homology step.
         let loop_options = LoopOptions {
             homology_selection: options.loops.homology_selection
                 && options.morse.schedule == Schedule::ScaleSpace,
@@ -233,6 +237,7 @@ pub fn find_necks_with_progress(
         let found =
             loops::find_loops_with_progress(loop_surface, &seeds, kind, &loop_options, progress)?;
 
+        // 6. Timings, the Morse and homology checks, and this side into the report.
         let t = &result.timings;
         let l = &found.timings;
         let mut timings = StageTimings {
