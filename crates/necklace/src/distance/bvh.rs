@@ -8,7 +8,7 @@
 //! fixed-size traversal stacks below. Triangles are stored reordered so that every node,
 //! leaf or not, owns a contiguous range of them.
 
-use crate::geom::{add, closest_on_triangle, cross, dot, scale, sub};
+use crate::geom::{add, closest_on_triangle, cross, dot, norm, scale, sub};
 
 /// A node splits when it holds more triangles than this (leaves hold 4 to 8).
 pub(super) const LEAF_SIZE: usize = 8;
@@ -81,6 +81,11 @@ pub(super) struct Bvh {
 }
 
 impl Bvh {
+    /// The diagonal of the root's box (0 for no triangles).
+    pub fn diagonal(&self) -> f64 {
+        self.nodes.first().map_or(0.0, |n| norm(sub(n.hi, n.lo)))
+    }
+
     /// Build over `tris` (corners) with their mesh face indices `faces`.
     pub fn build(tris: Vec<[[f64; 3]; 3]>, faces: Vec<u32>) -> Bvh {
         let n = tris.len();

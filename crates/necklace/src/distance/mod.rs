@@ -31,7 +31,7 @@ pub use winding::BETA;
 
 use rayon::prelude::*;
 
-use crate::geom::{norm, sub};
+use crate::geom::{add, cross, dot, norm, scale, sub};
 use crate::mesh::SurfaceMesh;
 
 use bvh::Bvh;
@@ -296,12 +296,16 @@ impl SurfaceDistance {
 
 impl SurfaceDistance {
     /// Pairs of mesh faces that cross each other: faces with no common vertex (of
-    /// `triangles`, the mesh's faces) where an edge of one passes through the other.
+    /// `triangles`, the mesh's faces) where an edge of one passes through the other,
+    /// meeting along a segment ([`crossing_segment`]) longer than
+    /// [`CROSSING_TOLERANCE`] × the mesh's bounding-box diagonal (nearly coplanar
+    /// neighbours of a finely split mesh touch within rounding; they do not cross).
     /// Sorted, each pair `[lower, higher]`. A closed surface without such pairs bounds
     /// a solid whose topology its genus predicts; one with them does not. Runs in
     /// parallel; the result does not depend on the thread count.
     pub fn self_intersections(&self, triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
         let bvh = &self.bvh;
+        let tolerance = CROSSING_TOLERANCE * bvh.diagonal();
         let mut pairs: Vec<[u32; 2]> = (0..bvh.tris.len())
             .into_par_iter()
             .map_init(Vec::new, |candidates, i| {
@@ -326,6 +330,10 @@ impl SurfaceDistance {
                         vj.is_some_and(|vj| !vj.iter().any(|v| vi.contains(v)))
                     })
                     .filter(|&&j| bvh::triangles_cross(&tri, &bvh.tris[j]))
+                    .filter(|&&j| {
+                        crossing_segment(tri, bvh.tris[j])
+                            .is_some_and(|[p, q]| norm(sub(p, q)) > tolerance)
+                    })
                     .map(|&j| [fi, bvh.faces[j]])
                     .collect::<Vec<_>>()
             })
@@ -334,6 +342,48 @@ impl SurfaceDistance {
         pairs.sort_unstable();
         pairs
     }
+}
+
+/// Two triangles cross (see [`SurfaceDistance::self_intersections`]) when they meet
+/// along a segment longer than this fraction of the bounding-box diagonal.
+pub const CROSSING_TOLERANCE: f64 = 1e-9;
+
+/// The segment where two crossing triangles meet: each one's part in the other's plane,
+/// overlapped along the planes' common line. `None` for coplanar or separate triangles.
+pub fn crossing_segment(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> Option<[[f64; 3]; 2]> {
+    let normal = |t: &[[f64; 3]; 3]| cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    let (na, nb) = (normal(&a), normal(&b));
+    // The part of triangle t in the plane through `origin` with normal n.
+    let in_plane = |t: &[[f64; 3]; 3], n: [f64; 3], origin: [f64; 3]| {
+        let d = t.map(|p| dot(n, sub(p, origin)));
+        if d.iter().all(|&x| x == 0.0) {
+            return None;
+        }
+        let mut points = Vec::with_capacity(3);
+        for i in 0..3 {
+            let j = (i + 1) % 3;
+            if d[i] == 0.0 {
+                points.push(t[i]);
+            } else if (d[i] < 0.0) != (d[j] < 0.0) && d[j] != 0.0 {
+                let s = d[i] / (d[i] - d[j]);
+                points.push(add(t[i], scale(sub(t[j], t[i]), s)));
+            }
+        }
+        (points.len() >= 2).then(|| [points[0], points[1]])
+    };
+    let sa = in_plane(&a, nb, b[0])?;
+    let sb = in_plane(&b, na, a[0])?;
+    let line = cross(na, nb);
+    let along = |p: [f64; 3]| dot(line, p);
+    let (a0, a1) = (along(sa[0]), along(sa[1]));
+    let (b0, b1) = (along(sb[0]), along(sb[1]));
+    let lo = a0.min(a1).max(b0.min(b1));
+    let hi = a0.max(a1).min(b0.max(b1));
+    if lo >= hi || lo.is_nan() || hi.is_nan() || a0 == a1 {
+        return None;
+    }
+    let at = |t: f64| add(sa[0], scale(sub(sa[1], sa[0]), (t - a0) / (a1 - a0)));
+    Some([at(lo), at(hi)])
 }
 
 /// The winding number of a non-finite query (NaN for NaN, 0 far away), else `None`.

@@ -23,7 +23,7 @@
 
 use std::path::Path;
 
-use super::volume::{crossing_pairs, nesting};
+use super::volume::nesting;
 use super::Side;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
@@ -70,7 +70,7 @@ fn inspect(mesh: &SurfaceMesh) -> (MeshReport, Vec<[u32; 2]>) {
         return (report, Vec::new());
     }
     let distance = SurfaceDistance::new(mesh);
-    let crossings = crossing_pairs(mesh, &distance);
+    let crossings = distance.self_intersections(&mesh.triangles);
     report.self_intersections = Some(crossings.len());
     if report.outward.is_some() && crossings.is_empty() {
         if let Some(wrong) = facing_wrong_way(mesh, &report) {

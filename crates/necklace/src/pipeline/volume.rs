@@ -32,7 +32,7 @@ use serde::Serialize;
 use super::Side;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
-use crate::geom::{add, cross, dot, norm, scale, sub};
+use crate::geom::{add, dot, norm, scale, sub};
 use crate::mesh::{MeshReport, SurfaceMesh, Topology};
 use crate::tet::{ComponentTopology, TetMesh, TetTopology, VertexKind};
 use crate::volume::{self, Domain, SharpFeatures, SizingFeature, StuffingOptions, StuffingStats};
@@ -319,7 +319,7 @@ pub fn volume_mesh(
     let centre = scale(add(lo, hi), 0.5);
     let radius = options.sphere_scale * 0.5 * diagonal;
     let mut warnings = Vec::new();
-    let crossings = crossing_pairs(surface, &distance);
+    let crossings = distance.self_intersections(&surface.triangles);
     let expected = if crossings.is_empty() {
         // A closed manifold that does not cross itself: the closest point tells the
         // sign (exact, and much cheaper near the surface than the winding number).
@@ -370,7 +370,10 @@ pub fn volume_mesh(
             let crossing_curve: Vec<[[f64; 3]; 2]> = crossings
                 .iter()
                 .filter_map(|&[f, g]| {
-                    crossing_segment(surface.corners(f as usize), surface.corners(g as usize))
+                    crate::distance::crossing_segment(
+                        surface.corners(f as usize),
+                        surface.corners(g as usize),
+                    )
                 })
                 .collect();
             let mut features = sharp_features(surface, &topology);
@@ -639,7 +642,7 @@ impl Side {
 /// genus is undefined or the surface crosses itself.
 pub fn expected_topology(surface: &SurfaceMesh, side: Side) -> Option<TetTopology> {
     let distance = SurfaceDistance::new(surface);
-    if !crossing_pairs(surface, &distance).is_empty() {
+    if !distance.self_intersections(&surface.triangles).is_empty() {
         return None;
     }
     predict(surface, side)
@@ -989,63 +992,6 @@ fn sharp_features(surface: &SurfaceMesh, topology: &Topology) -> SharpFeatures {
         }
     }
     features
-}
-
-/// Two triangles cross when they meet along a segment longer than this fraction of the
-/// bounding-box diagonal.
-const CROSSING_TOLERANCE: f64 = 1e-9;
-
-/// The pairs of triangles of `surface` that cross each other (`distance` is its
-/// distance structure). Triangles that meet along a segment shorter than rounding
-/// (nearly coplanar neighbours of a finely split mesh) touch; they do not cross.
-pub(super) fn crossing_pairs(surface: &SurfaceMesh, distance: &SurfaceDistance) -> Vec<[u32; 2]> {
-    let tolerance = CROSSING_TOLERANCE * surface.bbox_diagonal();
-    distance
-        .self_intersections(&surface.triangles)
-        .into_iter()
-        .filter(|&[f, g]| {
-            crossing_segment(surface.corners(f as usize), surface.corners(g as usize))
-                .is_some_and(|[p, q]| norm(sub(p, q)) > tolerance)
-        })
-        .collect()
-}
-
-/// The segment where two crossing triangles meet: each one's part in the other's plane,
-/// overlapped along the planes' common line. `None` for coplanar or separate triangles.
-fn crossing_segment(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> Option<[[f64; 3]; 2]> {
-    let normal = |t: &[[f64; 3]; 3]| cross(sub(t[1], t[0]), sub(t[2], t[0]));
-    let (na, nb) = (normal(&a), normal(&b));
-    // The part of triangle t in the plane through `origin` with normal n.
-    let in_plane = |t: &[[f64; 3]; 3], n: [f64; 3], origin: [f64; 3]| {
-        let d = t.map(|p| dot(n, sub(p, origin)));
-        if d.iter().all(|&x| x == 0.0) {
-            return None;
-        }
-        let mut points = Vec::with_capacity(3);
-        for i in 0..3 {
-            let j = (i + 1) % 3;
-            if d[i] == 0.0 {
-                points.push(t[i]);
-            } else if (d[i] < 0.0) != (d[j] < 0.0) && d[j] != 0.0 {
-                let s = d[i] / (d[i] - d[j]);
-                points.push(add(t[i], scale(sub(t[j], t[i]), s)));
-            }
-        }
-        (points.len() >= 2).then(|| [points[0], points[1]])
-    };
-    let sa = in_plane(&a, nb, b[0])?;
-    let sb = in_plane(&b, na, a[0])?;
-    let line = cross(na, nb);
-    let along = |p: [f64; 3]| dot(line, p);
-    let (a0, a1) = (along(sa[0]), along(sa[1]));
-    let (b0, b1) = (along(sb[0]), along(sb[1]));
-    let lo = a0.min(a1).max(b0.min(b1));
-    let hi = a0.max(a1).min(b0.max(b1));
-    if lo >= hi || lo.is_nan() || hi.is_nan() || a0 == a1 {
-        return None;
-    }
-    let at = |t: f64| add(sa[0], scale(sub(sa[1], sa[0]), (t - a0) / (a1 - a0)));
-    Some([at(lo), at(hi)])
 }
 
 /// Largest distance of a surface-kind vertex of `mesh` to the input surface.
