@@ -10,7 +10,7 @@ use necklace::output::{write_run, OutputOptions};
 use necklace::pipeline::{find_necks_with_progress, NeckOptions};
 use necklace::render::RenderOptions;
 use necklace::shapes::{Shape, ShapeKind};
-use necklace::{io, MeshReport};
+use necklace::{io, MeshReport, Side};
 
 use crate::Ui;
 
@@ -39,17 +39,10 @@ pub fn run(dir: &Path, ui: &Ui) -> Result<String> {
         io::write_mesh(folder.join("surface.obj"), &surface)?;
 
         let expected = shape.expected_necks();
-        let count = |name: &str| {
-            let found = report
-                .loops
-                .iter()
-                .filter(|l| format!("{:?}", l.kind).eq_ignore_ascii_case(name))
-                .count();
-            let wanted = expected
-                .iter()
-                .filter(|n| format!("{:?}", n.kind).eq_ignore_ascii_case(name))
-                .count();
-            format!("{found} {name}s (expected {wanted})")
+        let count = |side: Side| {
+            let found = report.loops.iter().filter(|l| l.kind == side).count();
+            let wanted = expected.iter().filter(|n| n.kind == side).count();
+            format!("{found} {}s (expected {wanted})", side.neck_name())
         };
         let _ = writeln!(
             out,
@@ -57,8 +50,8 @@ pub fn run(dir: &Path, ui: &Ui) -> Result<String> {
             kind.name(),
             shape.genus(),
             MeshReport::new(&surface).vertices,
-            count("handle"),
-            count("tunnel"),
+            count(Side::Inside),
+            count(Side::Outside),
             report.timings.total.total,
             folder.join("view.png").display()
         );
@@ -67,13 +60,13 @@ pub fn run(dir: &Path, ui: &Ui) -> Result<String> {
             // The expected neck of the same kind whose length is closest.
             let closest = expected
                 .iter()
-                .filter(|n| format!("{:?}", n.kind).eq_ignore_ascii_case(&format!("{:?}", l.kind)))
+                .filter(|n| n.kind == l.kind)
                 .filter_map(|n| n.length)
                 .min_by(|a, b| (a - l.length).abs().total_cmp(&(b - l.length).abs()));
             let _ = writeln!(
                 out,
                 "  {i:>3}  {:<6}  {:<9.5}  {:<9}  ({:.3}, {:.3}, {:.3})",
-                format!("{:?}", l.kind).to_lowercase(),
+                l.kind.neck_name(),
                 l.length,
                 closest.map_or("-".to_string(), |c| format!("{c:.5}")),
                 l.center[0],

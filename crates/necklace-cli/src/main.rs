@@ -15,9 +15,10 @@ use necklace::file::{check_output_file, check_output_folder};
 use necklace::loops::LoopOptions;
 use necklace::morse::MorseOptions;
 use necklace::output::OutputOptions;
-use necklace::pipeline::{self, Side, VolumeOptions};
+use necklace::pipeline::{self, VolumeOptions};
 use necklace::render::RenderOptions;
 use necklace::shapes::Shape;
+use necklace::Side;
 use necklace::{io, MeshReport};
 use progress::Bars;
 

@@ -9,8 +9,9 @@ use std::process::ExitCode;
 use anyhow::Result;
 use necklace::error::printable;
 use necklace::morse::{MorseResult, StepSummary};
-use necklace::pipeline::{NeckReport, Side, VolumeReport};
+use necklace::pipeline::{NeckReport, VolumeReport};
 use necklace::shapes::ShapeKind;
+use necklace::Side;
 
 /// Print warnings to stderr, one line each.
 pub fn warn(warnings: &[String]) {
@@ -72,7 +73,7 @@ pub fn loops_table(report: &NeckReport) -> Result<String> {
         let _ = writeln!(
             out,
             "{i:>3}  {:<6}  {:<10.5}  {:<8.5}  ({:>8.4}, {:>8.4}, {:>8.4})  {role:<13}  {scales:<17}  {:<9}  {:>11}  {:?} in {} rounds (from {:.5})",
-            format!("{:?}", l.kind).to_lowercase(),
+            l.kind.neck_name(),
             l.length,
             l.radius,
             l.center[0],

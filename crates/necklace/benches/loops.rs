@@ -9,9 +9,10 @@
 use std::collections::BTreeMap;
 
 use necklace::io;
-use necklace::loops::{find_loops, LoopKind, LoopOptions};
+use necklace::loops::{find_loops, LoopOptions};
 use necklace::morse::MorseOptions;
-use necklace::pipeline::{critical_points, loop_seeds, volume_mesh, Side, VolumeOptions};
+use necklace::pipeline::{critical_points, loop_seeds, volume_mesh, VolumeOptions};
+use necklace::Side;
 
 mod common;
 
@@ -33,11 +34,7 @@ fn main() {
             let volume = volume_mesh(&surface, side, &VolumeOptions::default()).expect("meshing");
             let r = critical_points(&surface, &volume, &MorseOptions::default()).expect("morse");
             let seeds = loop_seeds(&r);
-            let kind = match side {
-                Side::Inside => LoopKind::Handle,
-                Side::Outside => LoopKind::Tunnel,
-            };
-            let found = find_loops(&surface, &seeds, kind, &LoopOptions::default()).expect("loops");
+            let found = find_loops(&surface, &seeds, side, &LoopOptions::default()).expect("loops");
             let mut reasons: BTreeMap<String, usize> = BTreeMap::new();
             for d in &found.dropped {
                 let v = serde_json::to_value(d).expect("json");

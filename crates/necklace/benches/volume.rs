@@ -7,7 +7,8 @@
 
 use std::time::Instant;
 
-use necklace::pipeline::{volume_mesh, Side, VolumeOptions, VolumeResult};
+use necklace::pipeline::{volume_mesh, VolumeOptions, VolumeResult};
+use necklace::Side;
 use necklace::{io, SurfaceMesh};
 
 fn run(surface: &SurfaceMesh, side: Side, h: Option<f64>) -> (VolumeResult, f64) {

@@ -71,6 +71,6 @@ pub mod tetgen;
 pub mod volume;
 
 pub use error::{Error, ErrorKind, Location, Result};
-pub use mesh::{MeshReport, SurfaceMesh};
+pub use mesh::{MeshReport, Side, SurfaceMesh};
 pub use pipeline::{find_necks, NeckOptions as Options, NeckReport};
 pub use tet::{TetMesh, VertexKind};

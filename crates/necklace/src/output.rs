@@ -27,10 +27,9 @@ use serde_json::{json, Value};
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::io;
-use crate::loops::LoopKind;
-use crate::mesh::SurfaceMesh;
+use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::VertexType;
-use crate::pipeline::{NeckReport, Side, TrackedPoint};
+use crate::pipeline::{NeckReport, TrackedPoint};
 use crate::render::{self, Curve, Dot, RenderOptions, Scene};
 use crate::tet::TetMesh;
 
@@ -46,17 +45,10 @@ pub const TUNNEL_COLOR: [u8; 3] = [30, 100, 200];
 pub const SADDLE_COLOR: [u8; 3] = [245, 190, 20];
 
 /// The colour of a loop kind.
-pub fn kind_color(kind: LoopKind) -> [u8; 3] {
+pub fn kind_color(kind: Side) -> [u8; 3] {
     match kind {
-        LoopKind::Handle => HANDLE_COLOR,
-        LoopKind::Tunnel => TUNNEL_COLOR,
-    }
-}
-
-fn kind_name(kind: LoopKind) -> &'static str {
-    match kind {
-        LoopKind::Handle => "handle",
-        LoopKind::Tunnel => "tunnel",
+        Side::Inside => HANDLE_COLOR,
+        Side::Outside => TUNNEL_COLOR,
     }
 }
 
@@ -93,7 +85,7 @@ pub fn report_json(report: &NeckReport, input: Option<&Path>) -> Result<Value> {
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoopCurve {
     /// Handle or tunnel.
-    pub kind: LoopKind,
+    pub kind: Side,
     /// The closed polyline (last point joins the first).
     pub points: Vec<[f64; 3]>,
 }
@@ -183,9 +175,9 @@ pub fn loop_scene<'a>(
     saddles: &[[f64; 3]],
 ) -> Scene<'a> {
     let mut legend = Vec::new();
-    for kind in [LoopKind::Handle, LoopKind::Tunnel] {
+    for kind in [Side::Inside, Side::Outside] {
         if loops.iter().any(|l| l.kind == kind) {
-            legend.push((kind_name(kind).to_string(), kind_color(kind)));
+            legend.push((Side::neck_name(kind).to_string(), kind_color(kind)));
         }
     }
     Scene {
@@ -232,7 +224,7 @@ pub fn write_run(
     let names: Vec<String> = curves
         .iter()
         .enumerate()
-        .map(|(i, c)| format!("{}_{i}", kind_name(c.kind)))
+        .map(|(i, c)| format!("{}_{i}", Side::neck_name(c.kind)))
         .collect();
     io::write_polylines(&path, &lines, &names)?;
     written.push(path);
@@ -295,15 +287,11 @@ pub fn barcode_picture(report: &NeckReport) -> Result<Option<render::Image>> {
         .filter(|s| s.bars.iter().any(|b| b.birth_scale > 0.0))
         .map(|s| {
             let (name, color, kind) = match s.side {
-                Side::Inside => (
-                    "inside: handle necks in colour",
-                    HANDLE_COLOR,
-                    LoopKind::Handle,
-                ),
+                Side::Inside => ("inside: handle necks in colour", HANDLE_COLOR, Side::Inside),
                 Side::Outside => (
                     "outside: tunnel necks in colour",
                     TUNNEL_COLOR,
-                    LoopKind::Tunnel,
+                    Side::Outside,
                 ),
             };
             // A neck: a selected saddle whose loop was kept.
@@ -483,10 +471,13 @@ pub fn read_loops_json(path: impl AsRef<Path>) -> Result<Vec<LoopCurve>> {
         .iter()
         .enumerate()
         .map(|(i, l)| {
-            let kind = match l.get("kind").and_then(Value::as_str) {
-                Some("handle") => LoopKind::Handle,
-                Some("tunnel") => LoopKind::Tunnel,
-                _ => {
+            let kind = match l
+                .get("kind")
+                .and_then(Value::as_str)
+                .and_then(Side::from_neck_name)
+            {
+                Some(side) => side,
+                None => {
                     return Err(bad(format!(
                         "loop {i}: \"kind\" is not \"handle\" or \"tunnel\""
                     )))

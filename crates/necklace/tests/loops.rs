@@ -8,12 +8,13 @@ use std::f64::consts::PI;
 use necklace::loops::cut::{closed_length, loop_around, plane_cut, Plane};
 use necklace::loops::tighten::{tighten, SurfaceGeometry, TightenStatus};
 use necklace::loops::{
-    find_loops, DropReason, Initial, LoopKind, LoopOptions, MembraneFailure, MembraneUse, NeckLoop,
-    Seed, SurfacePoint, TightenOptions, Tightened,
+    find_loops, DropReason, Initial, LoopOptions, MembraneFailure, MembraneUse, NeckLoop, Seed,
+    SurfacePoint, TightenOptions, Tightened,
 };
 use necklace::mesh::Topology;
-use necklace::pipeline::{find_necks, NeckOptions, NeckReport, Side};
+use necklace::pipeline::{find_necks, NeckOptions, NeckReport};
 use necklace::shapes::{Shape, ShapeKind};
+use necklace::Side;
 use necklace::SurfaceMesh;
 
 /// A closed surface of revolution about z: radius `r(z)` for z in [-h, h], with a pole
@@ -273,7 +274,7 @@ fn necks(shape: &Shape, handles: bool, tunnels: bool) -> NeckReport {
     report
 }
 
-fn of_kind(report: &NeckReport, kind: LoopKind) -> Vec<&NeckLoop> {
+fn of_kind(report: &NeckReport, kind: Side) -> Vec<&NeckLoop> {
     report.loops.iter().filter(|l| l.kind == kind).collect()
 }
 
@@ -281,9 +282,9 @@ fn of_kind(report: &NeckReport, kind: LoopKind) -> Vec<&NeckLoop> {
 fn a_dumbbell_has_one_handle_loop_around_its_neck_and_no_tunnel() {
     let shape = Shape::new(ShapeKind::Dumbbell);
     let r = necks(&shape, true, true);
-    let handles = of_kind(&r, LoopKind::Handle);
+    let handles = of_kind(&r, Side::Inside);
     assert_eq!(handles.len(), 1, "{:?}", r.dropped);
-    assert!(of_kind(&r, LoopKind::Tunnel).is_empty());
+    assert!(of_kind(&r, Side::Outside).is_empty());
     let l = handles[0];
     let expected = 2.0 * PI * shape.param("neck");
     assert!(
@@ -298,7 +299,7 @@ fn a_dumbbell_has_one_handle_loop_around_its_neck_and_no_tunnel() {
 #[test]
 fn a_chain_of_three_balls_has_two_handle_loops() {
     let r = necks(&Shape::new(ShapeKind::Chain), true, false);
-    let handles = of_kind(&r, LoopKind::Handle);
+    let handles = of_kind(&r, Side::Inside);
     assert_eq!(handles.len(), 2, "{:?}", r.dropped);
     let mut xs: Vec<f64> = handles.iter().map(|l| l.center[0]).collect();
     xs.sort_by(f64::total_cmp);
@@ -312,7 +313,7 @@ fn a_chain_of_three_balls_has_two_handle_loops() {
 fn a_varying_torus_has_a_handle_at_its_thin_side_and_a_tunnel_around_its_hole() {
     let shape = Shape::new(ShapeKind::VaryingTorus);
     let r = necks(&shape, true, true);
-    let handles = of_kind(&r, LoopKind::Handle);
+    let handles = of_kind(&r, Side::Inside);
     assert_eq!(handles.len(), 1, "{:?}", r.dropped);
     let thin = 2.0 * PI * shape.param("r0") * (1.0 - shape.param("a"));
     assert!(
@@ -321,7 +322,7 @@ fn a_varying_torus_has_a_handle_at_its_thin_side_and_a_tunnel_around_its_hole() 
         handles[0].length
     );
     assert!(dist(handles[0].center, [-1.0, 0.0, 0.0]) < 0.02);
-    let tunnels = of_kind(&r, LoopKind::Tunnel);
+    let tunnels = of_kind(&r, Side::Outside);
     assert_eq!(tunnels.len(), 1, "{:?}", r.dropped);
     assert_eq!(winding_xy(&tunnels[0].points, 0.0, 0.0).abs(), 1);
     assert!(tunnels[0].normal[2].abs() > 0.99);
@@ -331,13 +332,13 @@ fn a_varying_torus_has_a_handle_at_its_thin_side_and_a_tunnel_around_its_hole() 
 fn an_eight_has_two_handle_loops_of_the_tube_radius_and_two_tunnels() {
     let shape = Shape::new(ShapeKind::Eight);
     let r = necks(&shape, true, true);
-    let handles = of_kind(&r, LoopKind::Handle);
+    let handles = of_kind(&r, Side::Inside);
     assert_eq!(handles.len(), 2, "{:?}", r.dropped);
     let tube = 2.0 * PI * shape.param("r");
     for l in &handles {
         assert!((l.length - tube).abs() < 0.01 * tube, "{}", l.length);
     }
-    let tunnels = of_kind(&r, LoopKind::Tunnel);
+    let tunnels = of_kind(&r, Side::Outside);
     assert_eq!(tunnels.len(), 2, "{:?}", r.dropped);
     let c = shape.param("c");
     let around: Vec<(i64, i64)> = tunnels
@@ -359,11 +360,11 @@ fn an_eight_has_two_handle_loops_of_the_tube_radius_and_two_tunnels() {
 fn a_torus_has_exactly_one_handle_of_its_tube_radius_and_one_tunnel() {
     let shape = Shape::new(ShapeKind::Torus);
     let r = necks(&shape, true, true);
-    let handles = of_kind(&r, LoopKind::Handle);
+    let handles = of_kind(&r, Side::Inside);
     assert_eq!(handles.len(), 1, "{:?}", r.dropped);
     let tube = 2.0 * PI * shape.param("r");
     assert!((handles[0].length - tube).abs() < 0.01 * tube);
-    assert_eq!(of_kind(&r, LoopKind::Tunnel).len(), 1, "{:?}", r.dropped);
+    assert_eq!(of_kind(&r, Side::Outside).len(), 1, "{:?}", r.dropped);
     // Neither separates the torus; together they span its homology.
     for l in &r.loops {
         assert!(!l.separating && l.areas.is_none(), "{l:?}");
@@ -387,10 +388,10 @@ fn a_pretzel_of_genus_3_has_three_handles_and_three_tunnels_of_rank_3_each() {
         let classes: Vec<Vec<u64>> = of_kind(&r, kind).iter().map(|l| l.class()).collect();
         (classes.len(), necklace::mesh::z2_rank(&classes))
     };
-    assert_eq!(rank(LoopKind::Handle), (3, 3), "{:?}", r.dropped);
-    assert_eq!(rank(LoopKind::Tunnel), (3, 3), "{:?}", r.dropped);
+    assert_eq!(rank(Side::Inside), (3, 3), "{:?}", r.dropped);
+    assert_eq!(rank(Side::Outside), (3, 3), "{:?}", r.dropped);
     let tube = 2.0 * PI * shape.param("r");
-    for l in of_kind(&r, LoopKind::Handle) {
+    for l in of_kind(&r, Side::Inside) {
         assert!((l.length - tube).abs() < 0.01 * tube, "{}", l.length);
     }
 }
@@ -409,8 +410,8 @@ fn a_dumbbell_neck_loop_separates_the_surface_into_two_equal_halves() {
 fn every_satellite_neck_is_found_at_its_radius_and_there_is_no_tunnel() {
     let shape = Shape::new(ShapeKind::Satellites);
     let r = necks(&shape, true, true);
-    assert!(of_kind(&r, LoopKind::Tunnel).is_empty(), "{:?}", r.dropped);
-    let mut handles = of_kind(&r, LoopKind::Handle);
+    assert!(of_kind(&r, Side::Outside).is_empty(), "{:?}", r.dropped);
+    let mut handles = of_kind(&r, Side::Inside);
     handles.sort_by(|a, b| a.length.total_cmp(&b.length));
     let expected = shape.expected_necks();
     assert_eq!(handles.len(), expected.len(), "{:?}", r.dropped);
@@ -441,8 +442,8 @@ fn shapes_without_a_narrow_part_have_no_loop() {
 fn a_buckyball_has_a_handle_per_stick_and_a_tunnel_per_window() {
     let shape = Shape::new(ShapeKind::Buckyball);
     let r = necks(&shape, true, true);
-    let handles = of_kind(&r, LoopKind::Handle);
-    let tunnels = of_kind(&r, LoopKind::Tunnel);
+    let handles = of_kind(&r, Side::Inside);
+    let tunnels = of_kind(&r, Side::Outside);
     assert_eq!((handles.len(), tunnels.len()), (90, 32));
     let stick = 2.0 * PI * shape.param("stick");
     for l in &handles {
@@ -468,7 +469,7 @@ fn a_buckyball_has_a_handle_per_stick_and_a_tunnel_per_window() {
         let classes: Vec<Vec<u64>> = of_kind(&r, kind).iter().map(|l| l.class()).collect();
         necklace::mesh::z2_rank(&classes)
     };
-    assert_eq!((rank(LoopKind::Handle), rank(LoopKind::Tunnel)), (31, 31));
+    assert_eq!((rank(Side::Inside), rank(Side::Outside)), (31, 31));
     // A tunnel per window: 12 pentagons and 20 hexagons, told apart by their girth.
     let mut lengths: Vec<f64> = tunnels.iter().map(|l| l.length).collect();
     lengths.sort_by(f64::total_cmp);
@@ -520,7 +521,7 @@ fn a_loop_that_slides_off_a_cap_is_dropped_as_collapsed() {
         persistence: 10,
         ..Seed::default()
     }];
-    let r = find_loops(&mesh, &seeds, LoopKind::Handle, &LoopOptions::default()).unwrap();
+    let r = find_loops(&mesh, &seeds, Side::Inside, &LoopOptions::default()).unwrap();
     assert!(r.loops.is_empty());
     assert_eq!(r.dropped.len(), 1);
     assert!(
@@ -534,7 +535,7 @@ fn a_loop_that_slides_off_a_cap_is_dropped_as_collapsed() {
 fn bent_ring_tunnel(bend: f64) {
     let shape = Shape::new(ShapeKind::BentRing).with("bend", bend).unwrap();
     let r = necks(&shape, true, true);
-    let (handles, tunnels) = (of_kind(&r, LoopKind::Handle), of_kind(&r, LoopKind::Tunnel));
+    let (handles, tunnels) = (of_kind(&r, Side::Inside), of_kind(&r, Side::Outside));
     assert_eq!((handles.len(), tunnels.len()), (1, 1), "{:?}", r.dropped);
     let expected = 2.0 * PI * shape.param("r");
     assert!((handles[0].length - expected).abs() < 0.01 * expected);
@@ -614,8 +615,8 @@ fn membrane_loops_agree_with_plane_loops_where_planes_work() {
         ..seed_on_z_axis(0.0)
     };
     let cases = [
-        (&torus, seed_on_z_axis(0.0), LoopKind::Tunnel),
-        (&dumbbell, x_normal, LoopKind::Handle),
+        (&torus, seed_on_z_axis(0.0), Side::Outside),
+        (&dumbbell, x_normal, Side::Inside),
     ];
     for (mesh, seed, kind) in cases {
         let by = |m| {
@@ -645,7 +646,7 @@ fn a_plane_that_misses_the_saddle_gives_a_reasoned_drop_and_bad_seeds_an_error()
         ..Seed::default()
     }];
     // Its membrane lands on one side of the ball: not around the saddle's axis.
-    let r = find_loops(&mesh, &outside, LoopKind::Tunnel, &LoopOptions::default()).unwrap();
+    let r = find_loops(&mesh, &outside, Side::Outside, &LoopOptions::default()).unwrap();
     assert!(matches!(
         r.dropped[0].reason,
         DropReason::NoMembraneLoop {
@@ -658,7 +659,7 @@ fn a_plane_that_misses_the_saddle_gives_a_reasoned_drop_and_bad_seeds_an_error()
         membranes: MembraneUse::Never,
         ..LoopOptions::default()
     };
-    let r = find_loops(&mesh, &outside, LoopKind::Tunnel, &planes_only).unwrap();
+    let r = find_loops(&mesh, &outside, Side::Outside, &planes_only).unwrap();
     assert!(matches!(
         r.dropped[0].reason,
         DropReason::NoLoopAroundSaddle {
@@ -670,13 +671,13 @@ fn a_plane_that_misses_the_saddle_gives_a_reasoned_drop_and_bad_seeds_an_error()
         normal: [0.0; 3],
         ..outside[0]
     }];
-    let e = find_loops(&mesh, &zero, LoopKind::Handle, &LoopOptions::default()).unwrap_err();
+    let e = find_loops(&mesh, &zero, Side::Inside, &LoopOptions::default()).unwrap_err();
     assert_eq!(e.kind(), necklace::ErrorKind::InvalidArgument);
     let bad = LoopOptions {
         max_length: -1.0,
         ..LoopOptions::default()
     };
-    assert!(find_loops(&mesh, &outside, LoopKind::Handle, &bad).is_err());
+    assert!(find_loops(&mesh, &outside, Side::Inside, &bad).is_err());
 }
 
 /// A seed on the z axis at height `z`, cutting with horizontal planes.
@@ -696,7 +697,7 @@ fn one_tunnel_loop(
     options: &LoopOptions,
     offset: f64,
 ) -> NeckLoop {
-    let found = find_loops(mesh, seeds, LoopKind::Tunnel, options).unwrap();
+    let found = find_loops(mesh, seeds, Side::Outside, options).unwrap();
     assert_eq!(found.loops.len(), 1, "{:?}", found.dropped);
     let l = found.loops.into_iter().next().unwrap();
     assert!(
@@ -740,7 +741,7 @@ fn where_the_plane_through_the_saddle_misses_a_parallel_plane_gives_the_loop() {
         plane_offsets: 0,
         ..planes_only
     };
-    let missed = find_loops(&mesh, &seeds, LoopKind::Tunnel, &none).unwrap();
+    let missed = find_loops(&mesh, &seeds, Side::Outside, &none).unwrap();
     assert!(missed.loops.is_empty());
     assert!(matches!(
         missed.dropped[0].reason,
@@ -783,7 +784,7 @@ fn a_window_with_a_curved_rim_finds_its_thin_band_of_planes() {
         ..options
     };
     assert!(4.0 * step > 2.0 * band);
-    let missed = find_loops(&mesh, &seeds, LoopKind::Tunnel, &coarse).unwrap();
+    let missed = find_loops(&mesh, &seeds, Side::Outside, &coarse).unwrap();
     assert!(missed.loops.is_empty());
     assert!(matches!(
         missed.dropped[0].reason,
@@ -820,14 +821,14 @@ fn a_cycle_loop_slides_to_the_narrower_of_two_waists() {
         ..options
     };
     let ring = |r: f64| 2.0 * PI * r;
-    let upper = find_loops(&mesh, &seeds, LoopKind::Handle, &stuck).unwrap();
+    let upper = find_loops(&mesh, &seeds, Side::Inside, &stuck).unwrap();
     assert_eq!(upper.loops.len(), 1, "{:?}", upper.dropped);
     assert!(
         (upper.loops[0].length - ring(0.2725)).abs() < 0.005 * ring(0.2725),
         "{}",
         upper.loops[0].length
     );
-    let slid = find_loops(&mesh, &seeds, LoopKind::Handle, &options).unwrap();
+    let slid = find_loops(&mesh, &seeds, Side::Inside, &options).unwrap();
     assert_eq!(slid.loops.len(), 1, "{:?}", slid.dropped);
     let l = &slid.loops[0];
     assert!(
@@ -873,9 +874,7 @@ fn loops_do_not_depend_on_the_thread_count_and_duplicates_merge() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| {
-                find_loops(&mesh, &seeds, LoopKind::Handle, &LoopOptions::default()).unwrap()
-            })
+            .install(|| find_loops(&mesh, &seeds, Side::Inside, &LoopOptions::default()).unwrap())
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a.loops, b.loops);
@@ -967,15 +966,15 @@ fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
         match &*name {
             // The paper's figures: the kitten's tail and neck and its one tunnel; the
             // botijo's five handles. A torus: its tube and its hole.
-            "kitten.off" => assert_eq!((count(LoopKind::Handle), count(LoopKind::Tunnel)), (2, 1)),
-            "botijo.obj" => assert!(count(LoopKind::Handle) >= 5),
-            "torus.obj" => assert_eq!((count(LoopKind::Handle), count(LoopKind::Tunnel)), (1, 1)),
-            "eight.off" => assert_eq!((count(LoopKind::Handle), count(LoopKind::Tunnel)), (2, 2)),
+            "kitten.off" => assert_eq!((count(Side::Inside), count(Side::Outside)), (2, 1)),
+            "botijo.obj" => assert!(count(Side::Inside) >= 5),
+            "torus.obj" => assert_eq!((count(Side::Inside), count(Side::Outside)), (1, 1)),
+            "eight.off" => assert_eq!((count(Side::Inside), count(Side::Outside)), (2, 2)),
             // More than twice its genus in handles (the paper's Fig. 1): the mother's
             // arms and neck, the baby's neck, the mother's waist, the arch and the base.
             // Its holes' rims no plane closes around: their membranes give the tunnels.
             "fertility.off" => {
-                assert!(count(LoopKind::Handle) >= 8);
+                assert!(count(Side::Inside) >= 8);
                 let outside = r.sides.iter().find(|s| s.side == Side::Outside).unwrap();
                 assert!(outside.homology.ok, "{name}: {:?}", outside.homology);
             }
@@ -986,7 +985,7 @@ fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
             // A knotted tube: no loop on it bounds a disk outside (its tunnel bounds a
             // Seifert surface), so every tunnel saddle is dropped, with that reason.
             "trefoil_knot.obj" => {
-                assert_eq!(count(LoopKind::Tunnel), 0);
+                assert_eq!(count(Side::Outside), 0);
                 assert!(r.dropped.iter().any(|d| matches!(
                     d.reason,
                     DropReason::NoMembraneLoop {
@@ -997,7 +996,7 @@ fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
             }
             // A loop round every one of its 96 windows, whose rims are not flat.
             "wiresphere.obj" => {
-                assert!(count(LoopKind::Tunnel) >= 95);
+                assert!(count(Side::Outside) >= 95);
                 let outside = r.sides.iter().find(|s| s.side == Side::Outside).unwrap();
                 assert!(outside.homology.ok, "{:?}", outside.homology);
             }
@@ -1029,12 +1028,12 @@ fn the_kitten_and_the_botijo_split_in_four_have_the_same_necks() {
             find_necks(&mesh, &NeckOptions::default()).unwrap(),
             find_necks(&fine, &NeckOptions::default()).unwrap(),
         );
-        let lengths = |r: &NeckReport, kind: LoopKind| {
+        let lengths = |r: &NeckReport, kind: Side| {
             let mut l: Vec<f64> = of_kind(r, kind).iter().map(|l| l.length).collect();
             l.sort_by(f64::total_cmp);
             l
         };
-        for (kind, expected) in [(LoopKind::Handle, handles), (LoopKind::Tunnel, tunnels)] {
+        for (kind, expected) in [(Side::Inside, handles), (Side::Outside, tunnels)] {
             let (a, b) = (lengths(&coarse, kind), lengths(&fine, kind));
             assert_eq!(
                 (a.len(), b.len()),

@@ -9,11 +9,10 @@ use necklace::morse::{
     analyze, classify, hessian_at, CriticalPoint, MorseOptions, MorseResult, RejectReason,
     SaddleRole, Schedule, Tracker, VertexType,
 };
-use necklace::pipeline::{
-    critical_points, surface_morse_expected, volume_mesh, Side, VolumeOptions,
-};
+use necklace::pipeline::{critical_points, surface_morse_expected, volume_mesh, VolumeOptions};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::volume::{stuff_volume, StuffingOptions};
+use necklace::Side;
 use necklace::{ErrorKind, MeshReport, TetMesh, VertexKind};
 
 /// The paper's schedule with `steps` steps (its tests predate the scale space and

@@ -3,8 +3,9 @@
 
 use std::f64::consts::PI;
 
-use necklace::shapes::{NeckKind, Shape, ShapeKind};
+use necklace::shapes::{Shape, ShapeKind};
 use necklace::MeshReport;
+use necklace::Side;
 
 fn mesh_at(kind: ShapeKind, res_factor: f64) -> (Shape, MeshReport) {
     let base = Shape::new(kind);
@@ -79,7 +80,7 @@ fn expected_necks_follow_the_documented_formulas() {
     let handles: Vec<_> = vt
         .expected_necks()
         .into_iter()
-        .filter(|n| n.kind == NeckKind::Handle)
+        .filter(|n| n.kind == Side::Inside)
         .collect();
     assert_eq!(handles.len(), 1);
     assert!((handles[0].length.unwrap() - 2.0 * PI * 0.18).abs() < 1e-12);
@@ -92,7 +93,7 @@ fn expected_necks_follow_the_documented_formulas() {
             .filter(|n| n.kind == k)
             .count()
     };
-    assert_eq!((count(NeckKind::Handle), count(NeckKind::Tunnel)), (2, 2));
+    assert_eq!((count(Side::Inside), count(Side::Outside)), (2, 2));
     let pretzel = Shape::from_name("pretzel", &[("g".into(), 4.0)]).unwrap();
     let count = |k| {
         pretzel
@@ -101,7 +102,7 @@ fn expected_necks_follow_the_documented_formulas() {
             .filter(|n| n.kind == k)
             .count()
     };
-    assert_eq!((count(NeckKind::Handle), count(NeckKind::Tunnel)), (4, 4));
+    assert_eq!((count(Side::Inside), count(Side::Outside)), (4, 4));
 
     let satellites = Shape::new(ShapeKind::Satellites);
     let lengths: Vec<f64> = satellites
@@ -122,7 +123,7 @@ fn expected_necks_follow_the_documented_formulas() {
             .filter(|n| n.kind == k)
             .count()
     };
-    assert_eq!((count(NeckKind::Handle), count(NeckKind::Tunnel)), (90, 32));
+    assert_eq!((count(Side::Inside), count(Side::Outside)), (90, 32));
     assert_eq!(buckyball.genus(), 31);
     for kind in [ShapeKind::Ellipsoid, ShapeKind::Capsule, ShapeKind::Limb] {
         assert!(Shape::new(kind).expected_necks().is_empty());

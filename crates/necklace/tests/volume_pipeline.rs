@@ -6,10 +6,9 @@ mod common;
 use std::f64::consts::PI;
 
 use necklace::morse::{MorseOptions, Schedule, SolverOptions};
-use necklace::pipeline::{
-    critical_points, surface_morse_expected, volume_mesh, Side, VolumeOptions,
-};
+use necklace::pipeline::{critical_points, surface_morse_expected, volume_mesh, VolumeOptions};
 use necklace::shapes::{Shape, ShapeKind};
+use necklace::Side;
 use necklace::{io, SurfaceMesh, TetMesh, VertexKind};
 
 /// Connected components of the tets (through shared vertices).

@@ -6,10 +6,11 @@ mod common;
 
 use common::Inside;
 
-use necklace::pipeline::{expected_topology, volume_mesh, Side, VolumeOptions};
+use necklace::pipeline::{expected_topology, volume_mesh, VolumeOptions};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::tet::{ComponentTopology, TetTopology};
 use necklace::volume::{stuff_volume, StuffingOptions};
+use necklace::Side;
 use necklace::{ErrorKind, SurfaceMesh};
 
 fn sphere(radius: f64, centre: [f64; 3], res: f64) -> SurfaceMesh {

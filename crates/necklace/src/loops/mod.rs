@@ -50,7 +50,7 @@ use serde::Serialize;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, closest_on_segment, cross, dot, norm, scale, sub};
-use crate::mesh::{HomologyBasis, SurfaceMesh, Topology, Z2Basis};
+use crate::mesh::{HomologyBasis, Side, SurfaceMesh, Topology, Z2Basis};
 use crate::progress::{Progress, Silent};
 use cut::{closed_length, loop_around, plane_basis, plane_cut, Plane};
 use membrane::membrane_loop;
@@ -58,16 +58,6 @@ pub use membrane::{MembraneFailure, MembraneOptions};
 use opening::Openings;
 use tighten::{tighten, SurfaceGeometry};
 pub use tighten::{SurfacePoint, TightenOptions, TightenStatus, Tightened};
-
-/// Which volume the saddles came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LoopKind {
-    /// From the inside volume: the loop goes around a narrow part of the solid.
-    Handle,
-    /// From the outside shell: the loop goes around a narrow part of the space around it.
-    Tunnel,
-}
 
 /// What the saddle of a seed does to the volume (see `morse::roles`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -218,8 +208,10 @@ impl Default for LoopOptions {
 /// A neck loop.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NeckLoop {
-    /// Handle or tunnel.
-    pub kind: LoopKind,
+    /// The side whose volume the saddle came from: inside a handle, outside a tunnel
+    /// (serialized `"handle"` / `"tunnel"`).
+    #[serde(serialize_with = "Side::serialize_as_neck")]
+    pub kind: Side,
     /// Closed polyline on the surface (first point not repeated).
     pub points: Vec<[f64; 3]>,
     /// The same points as surface locations (edge + parameter, or vertex).
@@ -487,8 +479,9 @@ impl std::fmt::Display for DropReason {
 /// A seed that gave no loop, and why.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct DroppedLoop {
-    /// Handle or tunnel.
-    pub kind: LoopKind,
+    /// Inside (handle) or outside (tunnel), serialized `"handle"` / `"tunnel"`.
+    #[serde(serialize_with = "Side::serialize_as_neck")]
+    pub kind: Side,
     /// Index of the seed.
     pub seed: usize,
     /// The saddle position.
@@ -501,7 +494,7 @@ pub struct DroppedLoop {
 }
 
 impl DroppedLoop {
-    fn new(kind: LoopKind, seeds: &[Seed], seed: usize, reason: DropReason) -> DroppedLoop {
+    fn new(kind: Side, seeds: &[Seed], seed: usize, reason: DropReason) -> DroppedLoop {
         DroppedLoop {
             kind,
             seed,
@@ -539,7 +532,7 @@ pub struct LoopResult {
 pub fn find_loops(
     surface: &SurfaceMesh,
     seeds: &[Seed],
-    kind: LoopKind,
+    kind: Side,
     options: &LoopOptions,
 ) -> Result<LoopResult> {
     find_loops_with_progress(surface, seeds, kind, options, &Silent)
@@ -549,7 +542,7 @@ pub fn find_loops(
 pub fn find_loops_with_progress(
     surface: &SurfaceMesh,
     seeds: &[Seed],
-    kind: LoopKind,
+    kind: Side,
     options: &LoopOptions,
     progress: &dyn Progress,
 ) -> Result<LoopResult> {
@@ -729,7 +722,7 @@ struct Candidate {
 /// around a cycle too, e.g. a stick between two balls on a cage).
 fn one_per_neck(
     seeds: &[Seed],
-    kind: LoopKind,
+    kind: Side,
     candidates: Vec<(usize, Candidate)>,
     options: &LoopOptions,
     dropped: &mut Vec<DroppedLoop>,
@@ -1085,7 +1078,7 @@ fn tightened(t: Tightened) -> std::result::Result<Tightened, DropReason> {
 fn select(
     surface: &SurfaceMesh,
     seeds: &[Seed],
-    kind: LoopKind,
+    kind: Side,
     mut candidates: Vec<(usize, Candidate)>,
     options: &LoopOptions,
     basis_len: usize,

@@ -25,12 +25,14 @@ mod csr;
 mod homology;
 mod repair;
 mod report;
+mod side;
 mod topology;
 
 pub use csr::Csr;
 pub use homology::{z2_rank, HomologyBasis, Z2Basis};
 pub use repair::{orient_consistently, remove_unreferenced, Reorientation};
 pub use report::{ComponentReport, MeshReport, MAX_COORDINATE};
+pub use side::Side;
 pub use topology::Topology;
 pub(crate) use topology::{find, union};
 

@@ -29,12 +29,10 @@ mod volume;
 
 use std::time::Instant;
 
-use serde::Serialize;
-
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, Result};
-use crate::loops::{self, DropReason, LoopKind, LoopOptions, NeckLoop, Role, Seed};
-use crate::mesh::{MeshReport, SurfaceMesh};
+use crate::loops::{self, DropReason, LoopOptions, NeckLoop, Role, Seed};
+use crate::mesh::{MeshReport, Side, SurfaceMesh};
 use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule};
 use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
@@ -55,16 +53,6 @@ pub use volume::{
     default_h, expected_topology, volume_mesh, Mesher, TopologyCheck, VolumeOptions, VolumeReport,
     VolumeResult, MAX_ROUNDS,
 };
-
-/// Which volume to mesh.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Side {
-    /// The solid bounded by the surface: handles.
-    Inside,
-    /// The shell between the surface and a bounding sphere: tunnels.
-    Outside,
-}
 
 /// The distance field of the method (paper sec. 3): the exact distance from every
 /// vertex of `mesh` to `surface`, 0 on surface-kind vertices. Outer-sphere vertices keep
@@ -185,14 +173,7 @@ pub fn find_necks_with_progress(
         if !wanted {
             continue;
         }
-        let kind = match side {
-            Side::Inside => LoopKind::Handle,
-            Side::Outside => LoopKind::Tunnel,
-        };
-        let name = match side {
-            Side::Inside => "inside",
-            Side::Outside => "outside",
-        };
+        let name = side.name();
         // 2. The volume mesh of this side.
         progress.start(&format!("volume mesh ({name})"), 0);
         let volume = volume_mesh(surface, side, &options.volume);
@@ -235,7 +216,7 @@ pub fn find_necks_with_progress(
             surface
         };
         let found =
-            loops::find_loops_with_progress(loop_surface, &seeds, kind, &loop_options, progress)?;
+            loops::find_loops_with_progress(loop_surface, &seeds, side, &loop_options, progress)?;
 
         // 6. Timings, the Morse and homology checks, and this side into the report.
         let t = &result.timings;
@@ -316,11 +297,8 @@ pub fn find_necks_with_progress(
         };
         if let Some(g) = genus.filter(|&g| g != rank as i64) {
             report.warnings.push(format!(
-                "{name}: the {kind} loops have Z2 rank {rank}, the surface has genus {g}",
-                kind = match side {
-                    Side::Inside => "handle",
-                    Side::Outside => "tunnel",
-                }
+                "{name}: the {} loops have Z2 rank {rank}, the surface has genus {g}",
+                side.neck_name()
             ));
         }
         report.loops.extend(found.loops);

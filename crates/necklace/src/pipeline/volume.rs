@@ -29,11 +29,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::Side;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, dot, norm, scale, sub};
-use crate::mesh::{MeshReport, SurfaceMesh, Topology};
+use crate::mesh::{MeshReport, Side, SurfaceMesh, Topology};
 use crate::tet::{ComponentTopology, TetMesh, TetTopology, VertexKind};
 use crate::volume::{self, Domain, SharpFeatures, SizingFeature, StuffingOptions, StuffingStats};
 
@@ -623,15 +622,6 @@ fn unresolved_features(
         }
     }
     out
-}
-
-impl Side {
-    fn name(self) -> &'static str {
-        match self {
-            Side::Inside => "inside",
-            Side::Outside => "outside",
-        }
-    }
 }
 
 /// The topology a closed, embedded surface predicts for one side's volume: inside,

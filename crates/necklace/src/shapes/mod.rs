@@ -23,7 +23,7 @@ use std::fmt;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::mesh::SurfaceMesh;
+use crate::mesh::{Side, SurfaceMesh};
 
 /// The generated shapes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -482,21 +482,14 @@ impl fmt::Display for ShapeKind {
     }
 }
 
-/// Whether a neck is lassoed inside the solid or in the space around it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum NeckKind {
-    /// A loop around a narrow part of the solid (found in the inside volume).
-    Handle,
-    /// A loop around a narrow part of the outside space, e.g. around a hole.
-    Tunnel,
-}
-
 /// A neck a shape is known to have.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ExpectedNeck {
-    /// Handle or tunnel.
-    pub kind: NeckKind,
+    /// Inside (a handle: around a narrow part of the solid) or outside (a tunnel:
+    /// around a narrow part of the space around it, e.g. a hole); serialized
+    /// `"handle"` / `"tunnel"`.
+    #[serde(serialize_with = "Side::serialize_as_neck")]
+    pub kind: Side,
     /// Length of the tightest loop, when known in closed form.
     pub length: Option<f64>,
     /// Centre of the tightest loop, when fixed by symmetry.
@@ -909,13 +902,13 @@ impl Shape {
     /// The necks this shape has, with their lengths and centres where known.
     pub fn expected_necks(&self) -> Vec<ExpectedNeck> {
         let handle = |length, center, note| ExpectedNeck {
-            kind: NeckKind::Handle,
+            kind: Side::Inside,
             length,
             center,
             note,
         };
         let tunnel = |length, center, note| ExpectedNeck {
-            kind: NeckKind::Tunnel,
+            kind: Side::Outside,
             length,
             center,
             note,
