@@ -10,8 +10,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use necklace::morse::{MorseOptions, Schedule};
-use necklace::pipeline::{self, find_necks_with_progress, NeckOptions, NeckReport, VolumeOptions};
+use necklace::pipeline::{self, find_necks_with_progress, NeckOptions, NeckReport};
 use necklace::render::chart::{chart, Chart, Series};
+use necklace::volume::VolumeOptions;
 use necklace::{io, SurfaceMesh};
 
 use crate::Ui;

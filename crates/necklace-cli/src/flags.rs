@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand};
 use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Schedule};
-use necklace::pipeline::{Mesher, VolumeOptions};
+use necklace::volume::{Mesher, VolumeOptions};
 
 #[derive(Parser)]
 #[command(

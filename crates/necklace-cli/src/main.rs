@@ -15,9 +15,10 @@ use necklace::file::{check_output_file, check_output_folder};
 use necklace::loops::LoopOptions;
 use necklace::morse::MorseOptions;
 use necklace::output::OutputOptions;
-use necklace::pipeline::{self, VolumeOptions};
+use necklace::pipeline::{self};
 use necklace::render::RenderOptions;
 use necklace::shapes::Shape;
+use necklace::volume::VolumeOptions;
 use necklace::Side;
 use necklace::{io, MeshReport};
 use progress::Bars;
@@ -338,7 +339,7 @@ fn volume(
     } else {
         Side::Inside
     };
-    let result = pipeline::volume_mesh(&surface, side, options)?;
+    let result = necklace::volume::volume_mesh(&surface, side, options)?;
     print::warn(&result.warnings);
     if let Some(output) = &output {
         io::write_tet_mesh(output, &result.mesh, &[])?;

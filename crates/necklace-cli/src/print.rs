@@ -9,8 +9,9 @@ use std::process::ExitCode;
 use anyhow::Result;
 use necklace::error::printable;
 use necklace::morse::{MorseResult, StepSummary};
-use necklace::pipeline::{NeckReport, VolumeReport};
+use necklace::pipeline::NeckReport;
 use necklace::shapes::ShapeKind;
+use necklace::volume::VolumeReport;
 use necklace::Side;
 
 /// Print warnings to stderr, one line each.

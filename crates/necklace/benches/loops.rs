@@ -11,7 +11,8 @@ use std::collections::BTreeMap;
 use necklace::io;
 use necklace::loops::{find_loops, LoopOptions};
 use necklace::morse::MorseOptions;
-use necklace::pipeline::{critical_points, loop_seeds, volume_mesh, VolumeOptions};
+use necklace::pipeline::{critical_points, loop_seeds};
+use necklace::volume::{volume_mesh, VolumeOptions};
 use necklace::Side;
 
 mod common;

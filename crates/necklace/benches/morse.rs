@@ -7,7 +7,8 @@
 
 use necklace::io;
 use necklace::morse::MorseOptions;
-use necklace::pipeline::{critical_points, volume_mesh, VolumeOptions};
+use necklace::pipeline::critical_points;
+use necklace::volume::{volume_mesh, VolumeOptions};
 use necklace::Side;
 
 mod common;

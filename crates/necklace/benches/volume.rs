@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-use necklace::pipeline::{volume_mesh, VolumeOptions, VolumeResult};
+use necklace::volume::{volume_mesh, VolumeOptions, VolumeResult};
 use necklace::Side;
 use necklace::{io, SurfaceMesh};
 

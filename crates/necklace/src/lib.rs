@@ -66,8 +66,6 @@ pub mod progress;
 pub mod render;
 pub mod shapes;
 pub mod tet;
-#[cfg(feature = "tetgen")]
-pub mod tetgen;
 pub mod volume;
 
 pub use error::{Error, ErrorKind, Location, Result};

@@ -24,9 +24,11 @@
 //! per-point results bit for bit whatever the number of threads.
 
 mod bvh;
+mod nesting;
 mod pseudonormal;
 mod winding;
 
+pub use nesting::nesting;
 pub use winding::BETA;
 
 use rayon::prelude::*;
@@ -81,6 +83,9 @@ pub struct SurfaceDistance {
     pseudonormals: Option<std::sync::Arc<Pseudonormals>>,
     /// Bounding-box diagonal of the usable triangles (the length scale of tolerances).
     scale: f64,
+    /// The crossing pairs of the mesh, when found once for all
+    /// ([`SurfaceDistance::of_surface`], [`SurfaceDistance::with_crossings`]).
+    crossings: Option<std::sync::Arc<Vec<[u32; 2]>>>,
 }
 
 impl std::fmt::Debug for SurfaceDistance {
@@ -121,7 +126,36 @@ impl SurfaceDistance {
             expansions,
             pseudonormals: None,
             scale,
+            crossings: None,
         }
+    }
+
+    /// The distance structure of a surface the method runs on, built once per run and
+    /// shared by every stage that asks about the surface (the input checks, both
+    /// volume meshes, the distance field, the loops): [`SurfaceDistance::new`], its
+    /// crossing pairs found once ([`SurfaceDistance::crossings`]) and, when there are
+    /// none, the sign from the pseudonormals ([`SurfaceDistance::use_pseudonormal_sign`]).
+    pub fn of_surface(mesh: &SurfaceMesh) -> Self {
+        let distance = SurfaceDistance::new(mesh);
+        let crossings = distance.self_intersections(&mesh.triangles);
+        distance.with_crossings(mesh, crossings)
+    }
+
+    /// Record `crossings`, the [`SurfaceDistance::self_intersections`] of `mesh` (the
+    /// mesh this was built from), and without any take the sign from the
+    /// pseudonormals, as [`SurfaceDistance::of_surface`] does.
+    pub fn with_crossings(mut self, mesh: &SurfaceMesh, crossings: Vec<[u32; 2]>) -> Self {
+        if crossings.is_empty() {
+            self.use_pseudonormal_sign(mesh);
+        }
+        self.crossings = Some(std::sync::Arc::new(crossings));
+        self
+    }
+
+    /// The crossing pairs of triangles recorded by [`SurfaceDistance::of_surface`] or
+    /// [`SurfaceDistance::with_crossings`] (`None` when they were not looked for).
+    pub fn crossings(&self) -> Option<&[[u32; 2]]> {
+        self.crossings.as_deref().map(Vec::as_slice)
     }
 
     /// Take the sign of signed distances from the closest point's angle-weighted

@@ -535,12 +535,15 @@ pub fn find_loops(
     kind: Side,
     options: &LoopOptions,
 ) -> Result<LoopResult> {
-    find_loops_with_progress(surface, seeds, kind, options, &Silent)
+    find_loops_with_progress(surface, None, seeds, kind, options, &Silent)
 }
 
-/// [`find_loops`], reporting each seed cut and tightened to `progress`.
+/// [`find_loops`], reporting each seed cut and tightened to `progress`. `distance` is
+/// the surface's distance structure when the caller has one (the run's); without it,
+/// one is built when a seed first needs closest points.
 pub fn find_loops_with_progress(
     surface: &SurfaceMesh,
+    distance: Option<&SurfaceDistance>,
     seeds: &[Seed],
     kind: Side,
     options: &LoopOptions,
@@ -560,8 +563,11 @@ pub fn find_loops_with_progress(
         openings: &openings,
         reach: options.opening_reach,
     };
-    // Closest points for membranes, built when the first seed needs one.
-    let distance = OnceLock::new();
+    let distance = LazyDistance {
+        surface,
+        given: distance,
+        built: OnceLock::new(),
+    };
     let preparation = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
@@ -574,9 +580,7 @@ pub fn find_loops_with_progress(
                     let mut c = measures.candidate(s.tightened, s.offset, s.initial);
                     c.sources = s.sources;
                     // The inscribed radius at the saddle: the exact distance there.
-                    let inscribed = distance
-                        .get_or_init(|| SurfaceDistance::new(surface))
-                        .distance(seed.position);
+                    let inscribed = distance.get().distance(seed.position);
                     c.flatness = (inscribed > 0.0)
                         .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
                     c
@@ -900,6 +904,25 @@ fn cutting_normals(seed: &Seed, options: &LoopOptions) -> ([f64; 3], Vec<[f64; 3
     (n, normals)
 }
 
+/// The surface's distance structure (closest points for membranes, the inscribed
+/// radius at a saddle): the caller's, or built when a seed first needs it.
+struct LazyDistance<'a> {
+    surface: &'a SurfaceMesh,
+    given: Option<&'a SurfaceDistance>,
+    built: OnceLock<SurfaceDistance>,
+}
+
+impl LazyDistance<'_> {
+    fn get(&self) -> &SurfaceDistance {
+        match self.given {
+            Some(distance) => distance,
+            None => self
+                .built
+                .get_or_init(|| SurfaceDistance::new(self.surface)),
+        }
+    }
+}
+
 /// Cut, choose, tighten; also the offset of the plane that gave the loop, and whether a
 /// plane or the membrane gave it. Order: the plane through the saddle, then (where
 /// membranes are used) the membrane, then the parallel planes nearest first.
@@ -907,7 +930,7 @@ fn loop_from_seed(
     surface: &SurfaceMesh,
     topology: &Topology,
     geometry: &SurfaceGeometry,
-    distance: &OnceLock<SurfaceDistance>,
+    distance: &LazyDistance<'_>,
     seed: &Seed,
     options: &LoopOptions,
 ) -> std::result::Result<Start, DropReason> {
@@ -916,7 +939,7 @@ fn loop_from_seed(
         membrane_loop(
             surface,
             topology,
-            distance.get_or_init(|| SurfaceDistance::new(surface)),
+            distance.get(),
             seed.position,
             n,
             &options.membrane,

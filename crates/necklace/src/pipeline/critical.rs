@@ -5,13 +5,12 @@
 
 use serde::Serialize;
 
-use super::{
-    distance_field, prepare_input, volume_mesh, PreparedSurface, Side, VolumeOptions, VolumeReport,
-    VolumeResult,
-};
+use super::{distance_field, prepare_input, PreparedSurface};
+use crate::distance::SurfaceDistance;
 use crate::error::Result;
-use crate::mesh::{MeshReport, SurfaceMesh};
+use crate::mesh::{MeshReport, Side, SurfaceMesh};
 use crate::morse::{self, MorseOptions, MorseResult};
+use crate::volume::{volume_mesh_with, VolumeOptions, VolumeReport, VolumeResult};
 
 /// What [`find_critical_points`] computed.
 #[derive(Debug, Clone)]
@@ -40,7 +39,7 @@ impl CriticalRun {
 }
 
 /// One side of a surface up to its selected 2-saddles: check the options, prepare the
-/// input ([`prepare_input`]), mesh the side ([`volume_mesh`]), then
+/// input ([`prepare_input`]), mesh the side (`volume::volume_mesh_with`), then
 /// [`critical_points`].
 pub fn find_critical_points(
     mesh: SurfaceMesh,
@@ -50,8 +49,8 @@ pub fn find_critical_points(
 ) -> Result<CriticalRun> {
     options.check()?;
     let prepared = prepare_input(mesh)?;
-    let volume = volume_mesh(&prepared.mesh, side, volume_options)?;
-    let result = critical_points(&prepared.mesh, &volume, options)?;
+    let volume = volume_mesh_with(&prepared.mesh, &prepared.distance, side, volume_options)?;
+    let result = critical_points_with(&prepared.distance, &volume, options)?;
     Ok(CriticalRun {
         prepared,
         volume,
@@ -67,7 +66,16 @@ pub fn critical_points(
     volume: &VolumeResult,
     options: &MorseOptions,
 ) -> Result<MorseResult> {
-    let field = distance_field(surface, &volume.mesh);
+    critical_points_with(&SurfaceDistance::new(surface), volume, options)
+}
+
+/// [`critical_points`] with the surface's distance structure built by the caller.
+pub fn critical_points_with(
+    distance: &SurfaceDistance,
+    volume: &VolumeResult,
+    options: &MorseOptions,
+) -> Result<MorseResult> {
+    let field = distance_field(distance, &volume.mesh);
     morse::analyze(&volume.mesh, &field, &morse_options_for(options, volume))
 }
 

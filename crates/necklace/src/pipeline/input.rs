@@ -23,15 +23,13 @@
 
 use std::path::Path;
 
-use super::volume::nesting;
-use super::Side;
-use crate::distance::SurfaceDistance;
+use crate::distance::{nesting, SurfaceDistance};
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{norm, sub};
 use crate::io;
 use crate::loops::Seed;
 use crate::mesh::{
-    orient_consistently, remove_unreferenced, MeshReport, SurfaceMesh, MAX_COORDINATE,
+    orient_consistently, remove_unreferenced, MeshReport, Side, SurfaceMesh, MAX_COORDINATE,
 };
 use crate::tet::{TetMesh, VertexKind};
 
@@ -50,6 +48,10 @@ pub struct PreparedSurface {
     /// surface). Face indices are those of the input and of `mesh` alike: preparing
     /// keeps the faces and their order.
     pub crossing_faces: Vec<u32>,
+    /// The distance structure of `mesh`, with its crossing pairs and, when there are
+    /// none, the pseudonormal sign ([`SurfaceDistance::of_surface`]): built once, and
+    /// shared by every stage of the run.
+    pub distance: SurfaceDistance,
     /// The repairs made, one line each.
     pub notes: Vec<String>,
     /// What is still unusual about the surface, one line each.
@@ -63,11 +65,12 @@ pub fn inspect_surface(mesh: &SurfaceMesh) -> MeshReport {
     inspect(mesh).0
 }
 
-/// [`inspect_surface`] and the crossing pairs of triangles.
-fn inspect(mesh: &SurfaceMesh) -> (MeshReport, Vec<[u32; 2]>) {
+/// [`inspect_surface`], the crossing pairs of triangles and the distance structure that
+/// found them (`None` for a mesh that is refused anyway).
+fn inspect(mesh: &SurfaceMesh) -> (MeshReport, Vec<[u32; 2]>, Option<SurfaceDistance>) {
     let mut report = MeshReport::new(mesh);
     if mesh.triangles.is_empty() || report.max_abs_coordinate > MAX_COORDINATE {
-        return (report, Vec::new());
+        return (report, Vec::new(), None);
     }
     let distance = SurfaceDistance::new(mesh);
     let crossings = distance.self_intersections(&mesh.triangles);
@@ -79,19 +82,19 @@ fn inspect(mesh: &SurfaceMesh) -> (MeshReport, Vec<[u32; 2]>) {
             report.outward = Some(k == 0);
         }
     }
-    (report, crossings)
+    (report, crossings, Some(distance))
 }
 
 /// Check a mesh, repair what has one right answer and say what was done (see the
 /// module doc). Open, non-manifold or self-crossing input is accepted with warnings.
-pub fn prepare_input(mesh: SurfaceMesh) -> Result<PreparedSurface> {
-    let (report, crossings) = inspect(&mesh);
+pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
+    let (report, crossings, distance) = inspect(&input);
     refuse_unusable(&report)?;
     let mut notes = Vec::new();
     let mut warnings = Vec::new();
 
     // 1. Unreferenced vertices.
-    let (mut mesh, removed) = remove_unreferenced(&mesh);
+    let (mut mesh, removed) = remove_unreferenced(&input);
     if removed > 0 {
         notes.push(format!(
             "removed {removed} vertices that no face uses (they would have set the bounding box)"
@@ -166,9 +169,16 @@ pub fn prepare_input(mesh: SurfaceMesh) -> Result<PreparedSurface> {
             "the surface crosses itself ({self_intersections} pairs of triangles): the method works on the solid its winding number encloses"
         ));
     }
+    // The run's distance structure: the one that inspected the input when nothing was
+    // changed, else one of the repaired mesh.
+    let distance = match distance {
+        Some(d) if mesh == input => d.with_crossings(&mesh, crossings),
+        _ => SurfaceDistance::of_surface(&mesh),
+    };
     Ok(PreparedSurface {
         mesh,
         report,
+        distance,
         flipped: turned.flipped_faces > 0 || flipped_components > 0,
         crossing_faces,
         notes,
@@ -277,12 +287,14 @@ fn flip_components(mesh: &mut SurfaceMesh, which: &[bool]) -> usize {
 /// How many seeds lie near a crossing face: a corner of a crossing triangle within
 /// [`CROSSING_REACH`] times the seed's distance to the surface (its loop's radius,
 /// about), plus the triangle's longest side.
-pub(super) fn seeds_near(surface: &SurfaceMesh, crossing_faces: &[u32], seeds: &[Seed]) -> usize {
+pub(super) fn seeds_near(surface: &PreparedSurface, seeds: &[Seed]) -> usize {
+    let crossing_faces = &surface.crossing_faces;
     if crossing_faces.is_empty() || seeds.is_empty() {
         return 0;
     }
     let positions: Vec<[f64; 3]> = seeds.iter().map(|s| s.position).collect();
-    let radii = SurfaceDistance::new(surface).distances(&positions);
+    let radii = surface.distance.distances(&positions);
+    let surface = &surface.mesh;
     let crossing: Vec<[[f64; 3]; 3]> = crossing_faces
         .iter()
         .map(|&f| surface.corners(f as usize))

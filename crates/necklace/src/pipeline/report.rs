@@ -5,11 +5,12 @@
 
 use serde::Serialize;
 
-use super::{Side, VolumeReport};
-use crate::loops::{DroppedLoop, NeckLoop};
-use crate::mesh::SurfaceMesh;
+use super::PreparedSurface;
+use crate::loops::{DropReason, DroppedLoop, NeckLoop};
+use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::{self, MorseResult, VertexType};
 use crate::tet::TetMesh;
+use crate::volume::VolumeReport;
 
 /// A critical point alive at the last level of a run, as the report keeps it (the
 /// picture and `critical.ply` are drawn from these by `output`).
@@ -52,10 +53,21 @@ pub struct StageTimings {
     pub smoothing: f64,
     /// Classification, tracking and the Hessian test.
     pub critical_points: f64,
-    /// Plane cuts, tightening and selection.
+    /// Plane cuts, tightening and selection, and the side's checks.
     pub loops: f64,
-    /// Sum of the above.
+    /// The side's wall-clock time: the sum of the above (they are laps of one clock).
     pub total: f64,
+}
+
+impl StageTimings {
+    fn add(&mut self, other: &StageTimings) {
+        self.volume_mesh += other.volume_mesh;
+        self.distance += other.distance;
+        self.smoothing += other.smoothing;
+        self.critical_points += other.critical_points;
+        self.loops += other.loops;
+        self.total += other.total;
+    }
 }
 
 /// The Morse check of one side: every classified step, and whether all held.
@@ -162,10 +174,62 @@ pub struct NeckReport {
 /// Stage timings per side and in total.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct NeckTimings {
+    /// The input step: checks, repairs, and the surface's distance structure.
+    pub input: f64,
     /// Inside (handles), when run.
     pub handles: Option<StageTimings>,
     /// Outside (tunnels), when run.
     pub tunnels: Option<StageTimings>,
     /// Sum over the sides run.
     pub total: StageTimings,
+    /// The whole run: `input` + `total.total`.
+    pub seconds: f64,
+}
+
+/// What one side of [`find_necks`](super::find_necks) found, before it joins the report.
+pub(super) struct SideRun {
+    pub report: SideReport,
+    pub morse: MorseCheck,
+    pub loops: Vec<NeckLoop>,
+    pub dropped: Vec<DroppedLoop>,
+    pub warnings: Vec<String>,
+}
+
+impl NeckReport {
+    /// The report of a run on `prepared` before any side: its notes and warnings.
+    pub(super) fn new(prepared: &PreparedSurface) -> Self {
+        NeckReport {
+            loops: Vec::new(),
+            dropped: Vec::new(),
+            morse: Vec::new(),
+            timings: NeckTimings::default(),
+            sides: Vec::new(),
+            flipped: prepared.flipped,
+            notes: prepared.notes.clone(),
+            surface: prepared.mesh.clone(),
+            warnings: prepared.warnings.clone(),
+        }
+    }
+
+    /// Add a side: its loops follow those already listed (duplicate references
+    /// shifted), its timings add to the total.
+    pub(super) fn add_side(&mut self, side: SideRun) {
+        let offset = self.loops.len();
+        self.dropped.extend(side.dropped.into_iter().map(|mut d| {
+            if let DropReason::Duplicate { of, .. } = &mut d.reason {
+                *of += offset;
+            }
+            d
+        }));
+        self.loops.extend(side.loops);
+        self.warnings.extend(side.warnings);
+        self.morse.push(side.morse);
+        let timings = side.report.timings;
+        self.timings.total.add(&timings);
+        match side.report.side {
+            Side::Inside => self.timings.handles = Some(timings),
+            Side::Outside => self.timings.tunnels = Some(timings),
+        }
+        self.sides.push(side.report);
+    }
 }

@@ -4,8 +4,14 @@
 //! is negative inside the region, zero on its boundary and 1-Lipschitz (a signed
 //! distance, or the max of signed distances for an intersection). For the method this is
 //! the solid inside the input surface (handles) or the shell between the surface and a
-//! bounding sphere (tunnels); the pipeline builds those domains. This replaces the
-//! paper's TetGen step (sec. 4, "preprocessing"); see issue 3 for why.
+//! bounding sphere (tunnels): [`SurfaceInside`] and [`Shell`] (`domains`). This replaces
+//! the paper's TetGen step (sec. 4, "preprocessing"); see issue 3 for why. TetGen itself
+//! is `volume::tetgen`, behind the `tetgen` feature (AGPL-3.0).
+//!
+//! On a surface, [`volume_mesh`] (`surface`) is the whole stage: the topology the
+//! surface predicts (`prediction`), thickness and gaps measured into sizing features
+//! and creases to snap onto (`surface_sizing`), then meshing (below) and refining
+//! until the mesh's topology is the surface's.
 //!
 //! Steps (Labelle & Shewchuk, "Isosurface Stuffing", SIGGRAPH 2007):
 //! 1. `octree`: a balanced octree whose cells have size `h` wherever the boundary may
@@ -38,16 +44,22 @@
 //!
 //! Conventions: lengths in the domain's units; output tets positively oriented; vertex
 //! kinds from the sign (inside: interior) and [`Domain::boundary_kind`] (on the zero
-//! set). Entry point: [`stuff_volume`].
+//! set). Entry points: [`stuff_volume`] for any domain, [`volume_mesh`] for a surface.
 
 mod background;
 mod chords;
+mod domains;
 mod features;
 mod octree;
+mod prediction;
 mod quality;
 mod repair;
 mod sizing;
 mod stuffing;
+mod surface;
+mod surface_sizing;
+#[cfg(feature = "tetgen")]
+pub mod tetgen;
 
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::time::Instant;
@@ -55,97 +67,18 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
-use crate::geom::{norm, scale, sub};
 use crate::tet::{renumber_used, TetMesh, VertexKind};
+pub use domains::{Domain, Shell, SurfaceInside};
 pub use features::SharpFeatures;
 use octree::{Cell, Key, Octree};
+pub use prediction::expected_topology;
 pub use quality::QualityStats;
-pub use sizing::SizingFeature;
-
-/// A region to mesh, given implicitly.
-pub trait Domain: Sync {
-    /// Negative inside, zero on the boundary, positive outside; 1-Lipschitz.
-    fn value(&self, p: [f64; 3]) -> f64;
-
-    /// [`Domain::value`] at many points (implementations may parallelise; the result
-    /// must not depend on the thread count).
-    fn values(&self, points: &[[f64; 3]]) -> Vec<f64> {
-        points.iter().map(|&p| self.value(p)).collect()
-    }
-
-    /// Like [`Domain::values`], but only values of magnitude below `band` must be exact;
-    /// beyond it any value of the right sign and magnitude ≥ `band` will do (lets an
-    /// implementation skip exact distances far from the boundary).
-    fn values_within(&self, points: &[[f64; 3]], band: f64) -> Vec<f64> {
-        let _ = band;
-        self.values(points)
-    }
-
-    /// Where the segment `a`–`b` (whose ends have opposite signs) crosses the boundary,
-    /// as a parameter in (0, 1), if the domain can say directly (e.g. by a ray cast);
-    /// `None` lets the mesher search for the root of [`Domain::value`].
-    fn crossing(&self, a: [f64; 3], b: [f64; 3]) -> Option<f64> {
-        let _ = (a, b);
-        None
-    }
-
-    /// The point of the boundary nearest to `p` (used to keep boundary vertices on the
-    /// boundary when the quality step moves them). The default takes Newton steps on
-    /// [`Domain::value`] with a central-difference gradient, which is exact in one step
-    /// for a signed distance.
-    fn project(&self, p: [f64; 3]) -> [f64; 3] {
-        let mut q = p;
-        for _ in 0..4 {
-            let f = self.value(q);
-            if f == 0.0 {
-                break;
-            }
-            let step = 1e-6 * (1.0 + norm(q));
-            let g: [f64; 3] = std::array::from_fn(|k| {
-                let mut a = q;
-                let mut b = q;
-                a[k] -= step;
-                b[k] += step;
-                (self.value(b) - self.value(a)) / (2.0 * step)
-            });
-            let gg = crate::geom::dot(g, g);
-            if !(gg > 0.0 && gg.is_finite()) {
-                break;
-            }
-            q = sub(q, scale(g, f / gg));
-        }
-        q
-    }
-
-    /// Which boundary a point on the zero set lies on.
-    fn boundary_kind(&self, p: [f64; 3]) -> VertexKind;
-
-    /// Corners and creases of the boundary that boundary vertices should be snapped
-    /// onto (none by default).
-    fn sharp_features(&self) -> SharpFeatures {
-        SharpFeatures::default()
-    }
-
-    /// A box `(min, max)` that contains the whole region.
-    fn bounds(&self) -> ([f64; 3], [f64; 3]);
-
-    /// Where the lattice must be finer than `h` (thin parts and gaps, and whatever a
-    /// caller learned from an earlier mesh); see [`SizingFeature`].
-    fn sizing(&self) -> Vec<SizingFeature> {
-        Vec::new()
-    }
-
-    /// The spacing wanted where the boundary passes near `p`, given the requested `h`:
-    /// `h` by default; a shell returns more near its outer sphere, which needs no detail.
-    fn spacing_near(&self, _p: [f64; 3], h: f64) -> f64 {
-        h
-    }
-
-    /// The largest value [`Domain::spacing_near`] returns for this `h`.
-    fn coarsest_spacing(&self, h: f64) -> f64 {
-        h
-    }
-}
+use sizing::clamp_spacing;
+pub use sizing::{spacing_floor, SizingFeature};
+pub use surface::{
+    default_h, volume_mesh, volume_mesh_with, Mesher, TopologyCheck, VolumeOptions, VolumeReport,
+    VolumeResult, MAX_ROUNDS,
+};
 
 /// Options of the stuffing mesher.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -558,68 +491,6 @@ struct Tree {
     centre_values: HashMap<Key, f64>,
     leaves: usize,
     estimated_tets: usize,
-}
-
-/// The tets the features ask for, were no spacing finer than `floor`: the volume each
-/// refines divided by its cells' volume. About half of those cells are inside, but the
-/// octree's grading around them adds about as many again, and the tree's own guard
-/// counts leaves (see `build_octree`), so the estimate counts all of them.
-fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
-    features
-        .iter()
-        .map(|f| {
-            let clamped = SizingFeature {
-                spacing: f.spacing.max(floor),
-                ..*f
-            };
-            TETS_PER_LEAF * clamped.region_volume() / clamped.spacing.powi(3)
-        })
-        .sum()
-}
-
-/// The smallest spacing sizing features may ask for within the budget
-/// ([`StuffingOptions::max_tets`]; `None`: no floor needed), found by bisection on a
-/// log scale between their finest spacing and `h`. [`stuff_volume`] applies it; a
-/// caller may ask first, to see which parts the budget leaves unresolved.
-pub fn spacing_floor(features: &[SizingFeature], options: &StuffingOptions) -> Option<f64> {
-    let (budget, h) = (options.max_tets as f64, options.h);
-    let features: Vec<SizingFeature> = features
-        .iter()
-        .filter(|f| f.is_valid() && f.spacing < h)
-        .copied()
-        .collect();
-    let features = &features[..];
-    if features.is_empty() || feature_estimate(features, 0.0) <= budget {
-        return None;
-    }
-    let finest = features.iter().map(|f| f.spacing).fold(h, f64::min);
-    if feature_estimate(features, h) > budget {
-        return Some(h);
-    }
-    let (mut lo, mut hi) = (finest.ln(), h.ln());
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi);
-        if feature_estimate(features, mid.exp()) > budget {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Some(hi.exp())
-}
-
-/// The features with no spacing below `floor` (all of them as they are without one).
-fn clamp_spacing(features: &[SizingFeature], floor: Option<f64>) -> Vec<SizingFeature> {
-    match floor {
-        None => features.to_vec(),
-        Some(floor) => features
-            .iter()
-            .map(|f| SizingFeature {
-                spacing: f.spacing.max(floor),
-                ..*f
-            })
-            .collect(),
-    }
 }
 
 /// A meshing attempt that failed: over the budget (with the estimate that was), or for

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap as HashMap;
 
 use super::octree::Cell;
+use super::{StuffingOptions, TETS_PER_LEAF};
 use crate::geom::{closest_on_triangle, dot, sub};
 
 /// A place that asks for a lattice spacing below `h` (see the module doc).
@@ -179,6 +180,68 @@ impl<'a> FeatureLists<'a> {
         }
         self.parents = next;
         out
+    }
+}
+
+/// The tets the features ask for, were no spacing finer than `floor`: the volume each
+/// refines divided by its cells' volume. About half of those cells are inside, but the
+/// octree's grading around them adds about as many again, and the tree's own guard
+/// counts leaves (see `build_octree`), so the estimate counts all of them.
+fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
+    features
+        .iter()
+        .map(|f| {
+            let clamped = SizingFeature {
+                spacing: f.spacing.max(floor),
+                ..*f
+            };
+            TETS_PER_LEAF * clamped.region_volume() / clamped.spacing.powi(3)
+        })
+        .sum()
+}
+
+/// The smallest spacing sizing features may ask for within the budget
+/// ([`StuffingOptions::max_tets`]; `None`: no floor needed), found by bisection on a
+/// log scale between their finest spacing and `h`. [`stuff_volume`](super::stuff_volume) applies it; a
+/// caller may ask first, to see which parts the budget leaves unresolved.
+pub fn spacing_floor(features: &[SizingFeature], options: &StuffingOptions) -> Option<f64> {
+    let (budget, h) = (options.max_tets as f64, options.h);
+    let features: Vec<SizingFeature> = features
+        .iter()
+        .filter(|f| f.is_valid() && f.spacing < h)
+        .copied()
+        .collect();
+    let features = &features[..];
+    if features.is_empty() || feature_estimate(features, 0.0) <= budget {
+        return None;
+    }
+    let finest = features.iter().map(|f| f.spacing).fold(h, f64::min);
+    if feature_estimate(features, h) > budget {
+        return Some(h);
+    }
+    let (mut lo, mut hi) = (finest.ln(), h.ln());
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if feature_estimate(features, mid.exp()) > budget {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(hi.exp())
+}
+
+/// The features with no spacing below `floor` (all of them as they are without one).
+pub(super) fn clamp_spacing(features: &[SizingFeature], floor: Option<f64>) -> Vec<SizingFeature> {
+    match floor {
+        None => features.to_vec(),
+        Some(floor) => features
+            .iter()
+            .map(|f| SizingFeature {
+                spacing: f.spacing.max(floor),
+                ..*f
+            })
+            .collect(),
     }
 }
 

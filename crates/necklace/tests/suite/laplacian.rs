@@ -1,8 +1,6 @@
 //! The stiffness and mass matrices against their defining properties.
 
-mod common;
-
-use common::Inside;
+use crate::common::Inside;
 
 use necklace::morse::{cotangent_stiffness, lumped_mass};
 use necklace::shapes::{Shape, ShapeKind};

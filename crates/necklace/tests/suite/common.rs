@@ -1,12 +1,11 @@
 //! What the integration tests share: the shared real meshes, and analytic domains (the
 //! inside of a generated shape, and the shell between it and a sphere of a given
-//! radius at the origin). Each test binary compiles this module and uses only part of it.
-#![allow(dead_code)]
+//! radius at the origin, through `volume::Shell`). Each test binary compiles this module and uses only part of it.
 
 use std::path::PathBuf;
 
 use necklace::shapes::Shape;
-use necklace::volume::Domain;
+use necklace::volume::{Domain, Shell};
 use necklace::VertexKind;
 
 /// The folder of shared real meshes: `$NECKLACE_MESHES`, else `../shared/data/meshes`
@@ -45,38 +44,10 @@ impl Domain for Inside {
     }
 }
 
-/// The shell between an analytic shape and a sphere of radius `.1` at the origin.
-pub struct Shell(pub Shape, pub f64);
-
-impl Shell {
-    fn sphere(&self, p: [f64; 3]) -> f64 {
-        (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - self.1
-    }
-}
-
-impl Domain for Shell {
-    fn value(&self, p: [f64; 3]) -> f64 {
-        (-self.0.sdf(p)).max(self.sphere(p))
-    }
-    fn boundary_kind(&self, p: [f64; 3]) -> VertexKind {
-        if self.sphere(p).abs() < self.0.sdf(p).abs() {
-            VertexKind::Outer
-        } else {
-            VertexKind::Surface
-        }
-    }
-    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        ([-self.1; 3], [self.1; 3])
-    }
-    fn spacing_near(&self, p: [f64; 3], h: f64) -> f64 {
-        match self.boundary_kind(p) {
-            VertexKind::Outer => self.1 / 8.0,
-            _ => h,
-        }
-    }
-    fn coarsest_spacing(&self, h: f64) -> f64 {
-        (self.1 / 8.0).max(h)
-    }
+/// The shell between an analytic shape and a sphere of radius `radius` at the origin
+/// (the library's own shell combinator around [`Inside`]).
+pub fn shell(shape: Shape, radius: f64) -> Shell<Inside> {
+    Shell::new(Inside(shape), [0.0; 3], radius)
 }
 
 /// The same surface with every triangle split in four at its edge midpoints (the same

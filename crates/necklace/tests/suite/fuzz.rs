@@ -5,8 +5,8 @@
 //! indices are in range and whose coordinates are finite, or an error whose message is
 //! one printable line; never panic.
 //!
-//! `cargo test --release --test fuzz` runs a few thousand executions per format;
-//! `NECKLACE_FUZZ_EXECS=1000000 cargo test --release --test fuzz -- --nocapture` runs
+//! `cargo test --release --test suite fuzz::` runs a few thousand executions per format;
+//! `NECKLACE_FUZZ_EXECS=1000000 cargo test --release --test suite fuzz:: -- --nocapture` runs
 //! that many in total and prints the count (a seeded generator: the same run each time;
 //! `NECKLACE_FUZZ_SEED` picks another).
 

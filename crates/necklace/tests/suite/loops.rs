@@ -1,8 +1,6 @@
 //! Neck loops (sec. 4.3): plane cut, tightening and selection against shapes whose
 //! narrowest loops are known in closed form.
 
-mod common;
-
 use std::f64::consts::PI;
 
 use necklace::loops::cut::{closed_length, loop_around, plane_cut, Plane};
@@ -891,7 +889,7 @@ fn loops_do_not_depend_on_the_thread_count_and_duplicates_merge() {
 
 #[test]
 fn every_loop_of_every_shared_model_is_a_closed_simple_geodesic() {
-    let Some(files) = common::shared_meshes() else {
+    let Some(files) = crate::common::shared_meshes() else {
         return;
     };
     let mut total = 0;
@@ -1013,7 +1011,7 @@ fn the_kitten_and_the_botijo_split_in_four_have_the_same_necks() {
     // five handles and five tunnels, and the neck of the jug below its handles (a
     // neck by its opening).
     for (name, handles, tunnels) in [("kitten.off", 2, 1), ("botijo.obj", 6, 5)] {
-        let file = common::meshes_dir().join(name);
+        let file = crate::common::meshes_dir().join(name);
         if !file.exists() {
             println!("SKIPPED: no {}", file.display());
             return;
@@ -1022,7 +1020,7 @@ fn the_kitten_and_the_botijo_split_in_four_have_the_same_necks() {
         let mesh = necklace::pipeline::prepare_input(mesh)
             .expect("a usable mesh")
             .mesh;
-        let fine = common::split_in_four(&mesh);
+        let fine = crate::common::split_in_four(&mesh);
         assert_eq!(fine.triangles.len(), 4 * mesh.triangles.len());
         let (coarse, fine) = (
             find_necks(&mesh, &NeckOptions::default()).unwrap(),

@@ -4,7 +4,7 @@
 use std::f64::consts::PI;
 
 use necklace::shapes::{Shape, ShapeKind};
-use necklace::tetgen::{mesh_inside, mesh_shell};
+use necklace::volume::tetgen::{mesh_inside, mesh_shell};
 use necklace::{SurfaceMesh, TetMesh, VertexKind};
 
 fn shape(kind: ShapeKind, res: f64) -> SurfaceMesh {

@@ -2,16 +2,15 @@
 //! the Morse identity, a hand-built vertex link of every type, an exact quadratic for
 //! the Hessian fit, and synthetic tracks.
 
-mod common;
-
-use common::Inside;
+use crate::common::Inside;
 use necklace::morse::{
     analyze, classify, hessian_at, CriticalPoint, MorseOptions, MorseResult, RejectReason,
     SaddleRole, Schedule, Tracker, VertexType,
 };
-use necklace::pipeline::{critical_points, surface_morse_expected, volume_mesh, VolumeOptions};
+use necklace::pipeline::{critical_points, surface_morse_expected};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::volume::{stuff_volume, StuffingOptions};
+use necklace::volume::{volume_mesh, VolumeOptions};
 use necklace::Side;
 use necklace::{ErrorKind, MeshReport, TetMesh, VertexKind};
 
@@ -509,7 +508,7 @@ fn around_a_trefoil_knot_one_cycle_is_essential_and_the_others_are_filled() {
     // The space around a knotted tube has H1 of rank 1 (the meridian), yet its
     // superlevel sweep closes several cycles at every level: the twists of the knot
     // close cycles that 1-saddles fill again lower down.
-    let file = common::meshes_dir().join("trefoil_knot.obj");
+    let file = crate::common::meshes_dir().join("trefoil_knot.obj");
     if !file.exists() {
         println!("SKIPPED: no {}", file.display());
         return;

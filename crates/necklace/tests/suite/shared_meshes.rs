@@ -4,8 +4,7 @@
 
 use necklace::{io, MeshReport};
 
-mod common;
-use common::meshes_dir;
+use crate::common::meshes_dir;
 
 #[test]
 fn shared_meshes_match_the_manifest() {

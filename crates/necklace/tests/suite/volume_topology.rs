@@ -2,13 +2,11 @@
 //! many small parts, needles and plates at the budget, refusals, the angle bound in
 //! refined thin parts.
 
-mod common;
+use crate::common::Inside;
 
-use common::Inside;
-
-use necklace::pipeline::{expected_topology, volume_mesh, VolumeOptions};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::tet::{ComponentTopology, TetTopology};
+use necklace::volume::{expected_topology, volume_mesh, VolumeOptions};
 use necklace::volume::{stuff_volume, StuffingOptions};
 use necklace::Side;
 use necklace::{ErrorKind, SurfaceMesh};

@@ -1,13 +1,12 @@
 //! Volume meshes of real and generated surfaces through the pipeline (exact distance,
 //! winding-number sign, thin-part refinement), against invariants and closed forms.
 
-mod common;
-
 use std::f64::consts::PI;
 
 use necklace::morse::{MorseOptions, Schedule, SolverOptions};
-use necklace::pipeline::{critical_points, surface_morse_expected, volume_mesh, VolumeOptions};
+use necklace::pipeline::{critical_points, surface_morse_expected};
 use necklace::shapes::{Shape, ShapeKind};
+use necklace::volume::{volume_mesh, VolumeOptions};
 use necklace::Side;
 use necklace::{io, SurfaceMesh, TetMesh, VertexKind};
 
@@ -137,7 +136,7 @@ fn manifest_genus(file: &std::path::Path) -> Option<i64> {
 #[test]
 fn every_shared_mesh_meshes_with_its_topology_and_angles_and_passes_the_morse_check_in_both_modes()
 {
-    let Some(files) = common::shared_meshes() else {
+    let Some(files) = crate::common::shared_meshes() else {
         return;
     };
     for file in files {

@@ -1,9 +1,7 @@
 //! Link classification against the Morse identity: Σ (1 − χ(lower link)) over interior
 //! vertices = g − 1 inside and g outside a connected genus-g surface.
 
-mod common;
-
-use common::{Inside, Shell};
+use crate::common::{shell, Inside};
 
 use necklace::morse::{
     classify, cotangent_stiffness, implicit_step, lumped_mass, Classification, LinkSides, Links,
@@ -68,7 +66,7 @@ fn the_morse_sum_outside_is_the_genus() {
     for kind in [ShapeKind::Sphere, ShapeKind::Torus] {
         let shape = Shape::new(kind);
         let genus = shape.genus() as i64;
-        let m = stuff_volume(&Shell(shape.clone(), 2.5), &StuffingOptions::new(0.08))
+        let m = stuff_volume(&shell(shape.clone(), 2.5), &StuffingOptions::new(0.08))
             .unwrap()
             .mesh;
         let c = classify(&m, &distance_field(&shape, &m)).unwrap();

@@ -1,8 +1,6 @@
 //! Isosurface stuffing on analytic domains, against closed-form answers.
 
-mod common;
-
-use common::{Inside, Shell};
+use crate::common::{shell, Inside};
 
 use std::f64::consts::PI;
 
@@ -64,7 +62,7 @@ fn torus_inside_has_euler_0_and_its_shell_euler_1() {
         m.dihedral_range_deg()
     );
     assert_eq!(m.euler_characteristic(), 0);
-    let shell = stuff_volume(&Shell(shape, 2.0), &StuffingOptions::new(h)).unwrap();
+    let shell = stuff_volume(&shell(shape, 2.0), &StuffingOptions::new(h)).unwrap();
     let m = check_valid(&shell);
     println!(
         "shell {:?} dihedral {:?} kinds {:?}",

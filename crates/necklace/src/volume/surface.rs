@@ -1,0 +1,692 @@
+//! The volume stage on a surface: one side of a closed surface as an implicit domain
+//! ([`SurfaceInside`](super::SurfaceInside), in a [`Shell`](super::Shell) for the
+//! outside), the sizing that resolves its thin parts and gaps
+//! (`surface_sizing`), the mesher call, and the check that the mesh has the topology the
+//! surface predicts (`prediction`), refining where it does not. TetGen, the paper's
+//! mesher, is the alternative behind the `tetgen` feature (`volume::tetgen`).
+//!
+//! Topology comes first: necks are read off the volume mesh, so an extra tunnel through
+//! a thin wall or a lost thin part is an extra or missing neck. [`volume_mesh`]:
+//! 1. predicts the topology ([`expected_topology`]): per component of the inside (or of
+//!    the shell) its χ and the χ of each boundary surface, from the surface's
+//!    components, their genus and how they nest;
+//! 2. measures at every surface vertex the thickness of the solid and the width of the
+//!    gap in front of it (a ray along the vertex normal, then the inscribed ball touching
+//!    there: the medial distance, which sees a wire's diameter where the ray sees a
+//!    chord) and asks for cells half of that wherever it is below `2h`
+//!    ([`SizingFeature`]s over the thin triangles, reaching into the part; no fixed
+//!    floor: the tet budget sets it). Folds of the surface and places where it crosses
+//!    itself are not parts, and are skipped;
+//! 3. finds the creases and corners for the mesher to snap its boundary onto;
+//! 4. meshes (`volume::stuff_volume`), compares the mesh's topology with the
+//!    prediction, and where they differ refines where the mesh shows why (pinches,
+//!    swallowed boundary vertices, and surface vertices the mesh's boundary does not
+//!    come near) and meshes again, up to [`MAX_ROUNDS`] times, keeping the mesh closest
+//!    to the prediction. A difference that remains, or a budget that bound, is reported
+//!    in [`VolumeResult::warnings`] with the figures, never dropped.
+//!
+//! Conventions: lengths in the surface's units; the outer sphere of a shell is centred
+//! at the bounding box's centre with radius `sphere_scale` × half its diagonal.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::prediction::predict;
+use super::surface_sizing::{
+    sharp_features, thickness, thin_part_sizing, CELLS_ACROSS, THIN_FACTOR,
+};
+use super::{
+    spacing_floor, stuff_volume, Shell, SizingFeature, StuffingOptions, StuffingStats,
+    SurfaceInside, VolumeMesh, DEFAULT_MAX_TETS,
+};
+use crate::distance::SurfaceDistance;
+use crate::error::{Error, ErrorKind, Result};
+use crate::geom::{add, norm, scale, sub};
+use crate::mesh::{Side, SurfaceMesh, Topology};
+use crate::tet::{TetMesh, TetTopology, VertexKind};
+
+/// Which volume mesher to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mesher {
+    /// necklace's isosurface stuffing (default).
+    Stuffing,
+    /// TetGen with the paper's switches "pq1.2"; needs the `tetgen` cargo feature
+    /// (AGPL-3.0).
+    Tetgen,
+}
+
+/// Options of [`volume_mesh`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VolumeOptions {
+    /// The mesher (default [`Mesher::Stuffing`]).
+    pub mesher: Mesher,
+    /// Lattice spacing along the surface, in the surface's units. `None` (default):
+    /// [`default_h`]. Thin parts and gaps get finer cells whatever `h` is.
+    pub h: Option<f64>,
+    /// Outer sphere radius as a multiple of the bounding box's half diagonal (default
+    /// 1.5), centred at the box centre.
+    pub sphere_scale: f64,
+    /// The most tets the mesh may have (default 20 million): a run estimated above it
+    /// is refused with the estimate, and refinement for topology stops at it.
+    pub max_tets: usize,
+    /// The quality step's target smallest dihedral angle, degrees (default 10).
+    pub min_dihedral_deg: f64,
+}
+
+impl Default for VolumeOptions {
+    fn default() -> Self {
+        VolumeOptions {
+            mesher: Mesher::Stuffing,
+            h: None,
+            sphere_scale: 1.5,
+            max_tets: DEFAULT_MAX_TETS,
+            min_dihedral_deg: 10.0,
+        }
+    }
+}
+
+/// Most meshings of one side: the first, and refinements while the topology differs
+/// from the surface's.
+pub const MAX_ROUNDS: usize = 4;
+
+/// Cells along the curve where the surface crosses itself are this many times finer
+/// than `h`.
+const CROSSING_REFINEMENT: f64 = 8.0;
+
+/// The largest lattice spacing accepted, as a fraction of the bounding-box diagonal.
+const MAX_H_FRACTION: f64 = 0.25;
+
+/// The inside mesh's volume may differ from the volume the surface encloses by this
+/// fraction before a warning says so (the boundary's chords cut off a little).
+const VOLUME_TOLERANCE: f64 = 0.05;
+
+/// A volume mesh of one side of a surface, with what describes it.
+#[derive(Debug, Clone)]
+pub struct VolumeResult {
+    /// The tet mesh (vertex kinds: interior, surface, outer sphere).
+    pub mesh: TetMesh,
+    /// Which side.
+    pub side: Side,
+    /// The spacing used along the surface away from thin parts.
+    pub h: f64,
+    /// Centre and radius of the outer sphere (outside only).
+    pub sphere: Option<([f64; 3], f64)>,
+    /// The mesher used.
+    pub mesher: Mesher,
+    /// The stuffing mesher's counts of the last round (`None` for TetGen).
+    pub stats: Option<StuffingStats>,
+    /// Surface vertices whose part or gap is thinner than `2h`.
+    pub thin_vertices: usize,
+    /// The topology predicted from the surface and the one found.
+    pub topology: TopologyCheck,
+    /// Largest distance of a surface-kind vertex to the input surface, divided by the
+    /// bounding-box diagonal.
+    pub hausdorff_to_surface: f64,
+    /// What the caller should know: a topology that still differs from the surface's,
+    /// tets left below the dihedral target. One line each.
+    pub warnings: Vec<String>,
+    /// Wall-clock seconds, all rounds.
+    pub seconds: f64,
+}
+
+/// The volume mesh's topology against the surface's prediction.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct TopologyCheck {
+    /// What the surface predicts (`None` when it cannot: a component whose genus is
+    /// undefined, or components that cross each other).
+    pub expected: Option<TetTopology>,
+    /// What the mesh has.
+    pub found: TetTopology,
+    /// Whether they agree (`None` without a prediction).
+    pub matches: Option<bool>,
+    /// Meshings done (1 when the first had the right topology).
+    pub rounds: usize,
+}
+
+/// The default spacing: 1/64 of the bounding-box diagonal. Parts and gaps thinner
+/// than `2h` are refined locally, so the rule needs no knowledge of the thinnest part.
+pub fn default_h(surface: &SurfaceMesh) -> f64 {
+    surface.bbox_diagonal() / 64.0
+}
+
+/// The summary of a volume mesh that `necklace volume --json` prints.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VolumeReport {
+    /// Which side was meshed.
+    pub side: Side,
+    /// Vertex count.
+    pub vertices: usize,
+    /// Tet count.
+    pub tets: usize,
+    /// Vertices strictly inside the region.
+    pub interior_vertices: usize,
+    /// Vertices on the input surface.
+    pub surface_vertices: usize,
+    /// Vertices on the outer sphere.
+    pub outer_vertices: usize,
+    /// χ of the tet mesh (V − E + F − T).
+    pub euler_volume: i64,
+    /// χ of its boundary surface (twice `euler_volume` for a 3-manifold with boundary).
+    pub euler_boundary: i64,
+    /// Connected components of the tet mesh.
+    pub components: usize,
+    /// Connected components of its boundary.
+    pub boundary_components: usize,
+    /// The topology against the surface's prediction.
+    pub topology: TopologyCheck,
+    /// Smallest dihedral angle, degrees.
+    pub min_dihedral_deg: f64,
+    /// Largest dihedral angle, degrees.
+    pub max_dihedral_deg: f64,
+    /// All dihedral angles (six per tet) in 5° bins: `[0, 5)`, `[5, 10)`, … `[175, 180]`.
+    pub dihedral_histogram: Vec<usize>,
+    /// Tets whose smallest dihedral angle is below 8°, and below 10°.
+    pub tets_below_8_deg: usize,
+    /// Tets whose smallest dihedral angle is below 10°.
+    pub tets_below_10_deg: usize,
+    /// Largest distance of a surface vertex to the input surface / bbox diagonal.
+    pub hausdorff_to_surface: f64,
+    /// Sum of tet volumes.
+    pub volume: f64,
+    /// The mesher used.
+    pub mesher: Mesher,
+    /// Lattice spacing along the surface (stuffing).
+    pub h: f64,
+    /// Smallest cell used (thin parts; stuffing).
+    pub finest_cell: f64,
+    /// Surface vertices whose part or gap is thinner than `2h`.
+    pub thin_vertices: usize,
+    /// The stuffing mesher's counts (last round; absent for TetGen).
+    pub stuffing: Option<StuffingStats>,
+    /// One line per thing to know (see [`VolumeResult::warnings`]).
+    pub warnings: Vec<String>,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+impl VolumeResult {
+    /// Counts, invariants and quality of the mesh.
+    pub fn report(&self) -> VolumeReport {
+        let m = &self.mesh;
+        let (interior, surface, outer) = m.kind_counts();
+        let mut histogram = vec![0usize; 36];
+        let (mut below_8, mut below_10) = (0, 0);
+        let (mut lo, mut hi) = (180.0f64, 0.0f64);
+        for t in 0..m.num_tets() {
+            let angles = crate::tet::dihedral_angles_deg(m.corners(t));
+            let smallest = angles.iter().copied().fold(180.0, f64::min);
+            below_8 += usize::from(smallest < 8.0);
+            below_10 += usize::from(smallest < 10.0);
+            for a in angles {
+                histogram[((a / 5.0) as usize).min(35)] += 1;
+                lo = lo.min(a);
+                hi = hi.max(a);
+            }
+        }
+        if m.num_tets() == 0 {
+            (lo, hi) = (0.0, 0.0);
+        }
+        let found = &self.topology.found;
+        VolumeReport {
+            side: self.side,
+            vertices: m.num_vertices(),
+            tets: m.num_tets(),
+            interior_vertices: interior,
+            surface_vertices: surface,
+            outer_vertices: outer,
+            euler_volume: found.euler(),
+            euler_boundary: found.boundary_euler(),
+            components: found.components.len(),
+            boundary_components: found.boundary_components(),
+            topology: self.topology.clone(),
+            min_dihedral_deg: lo,
+            max_dihedral_deg: hi,
+            dihedral_histogram: histogram,
+            tets_below_8_deg: below_8,
+            tets_below_10_deg: below_10,
+            hausdorff_to_surface: self.hausdorff_to_surface,
+            volume: m.volume(),
+            mesher: self.mesher,
+            h: self.h,
+            finest_cell: self.stats.map_or(0.0, |s| s.finest_cell),
+            thin_vertices: self.thin_vertices,
+            stuffing: self.stats,
+            warnings: self.warnings.clone(),
+            seconds: self.seconds,
+        }
+    }
+}
+
+/// Mesh one side of a closed, outward-oriented surface (see the module doc).
+pub fn volume_mesh(
+    surface: &SurfaceMesh,
+    side: Side,
+    options: &VolumeOptions,
+) -> Result<VolumeResult> {
+    let start = Instant::now();
+    check_surface(surface)?;
+    let distance = SurfaceDistance::of_surface(surface);
+    let mut result = volume_mesh_with(surface, &distance, side, options)?;
+    result.seconds = start.elapsed().as_secs_f64();
+    Ok(result)
+}
+
+/// [`volume_mesh`] with the surface's distance structure built by the caller
+/// ([`SurfaceDistance::of_surface`]: one per run, shared with the other stages).
+pub fn volume_mesh_with(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    side: Side,
+    options: &VolumeOptions,
+) -> Result<VolumeResult> {
+    let start = Instant::now();
+    let (lo, hi) = check_surface(surface)?;
+    let diagonal = norm(sub(hi, lo));
+    let h = options.h.unwrap_or_else(|| default_h(surface));
+    if !(h.is_finite() && h > 0.0) {
+        return Err(Error::invalid_argument(format!("h = {h} must be positive")));
+    }
+    if h > MAX_H_FRACTION * diagonal {
+        return Err(Error::invalid_argument(format!(
+            "h = {h:.3e} is above a quarter of the surface's bounding-box diagonal ({diagonal:.3e}): no lattice that coarse resolves the surface (the default is diagonal / 64)"
+        )));
+    }
+    if !(options.sphere_scale > 1.0 && options.sphere_scale.is_finite()) {
+        return Err(Error::invalid_argument(format!(
+            "sphere_scale = {} must exceed 1 (the sphere must enclose the surface)",
+            options.sphere_scale
+        )));
+    }
+
+    let centre = scale(add(lo, hi), 0.5);
+    let radius = options.sphere_scale * 0.5 * diagonal;
+    let mut warnings = Vec::new();
+    let crossings = match distance.crossings() {
+        Some(found) => found.to_vec(),
+        None => distance.self_intersections(&surface.triangles),
+    };
+    let expected = if crossings.is_empty() {
+        predict(surface, side)
+    } else {
+        warnings.push(format!(
+            "the surface crosses itself ({} pairs of triangles): the {} volume is the solid its winding number encloses, whose topology the genus does not predict",
+            crossings.len(),
+            side.name()
+        ));
+        None
+    };
+    let (mesh, found, stats, thin_vertices, rounds) = match options.mesher {
+        Mesher::Stuffing => {
+            let sphere = (side == Side::Outside).then_some((centre, radius));
+            let (stuffed, found, thin_vertices, rounds) = stuff_surface(
+                surface,
+                distance,
+                &crossings,
+                sphere,
+                h,
+                options,
+                &expected,
+                &mut warnings,
+            )?;
+            (
+                stuffed.mesh,
+                found,
+                Some(stuffed.stats),
+                thin_vertices,
+                rounds,
+            )
+        }
+        Mesher::Tetgen => {
+            let mesh = tetgen_mesh(surface, side, centre, radius)?;
+            let found = mesh.topology();
+            (mesh, found, None, 0, 1)
+        }
+    };
+    if mesh.num_tets() == 0 {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            format!(
+                "the {} volume mesh is empty: no lattice point of spacing h = {h:.3e} fell inside (a part too thin for the budget, or a surface that encloses nothing); a smaller --h may help",
+                side.name()
+            ),
+        ));
+    }
+    let matches = expected.as_ref().map(|e| *e == found);
+    if expected.is_none() {
+        warnings.push(format!(
+            "the {} volume mesh has topology {found}, which the surface cannot confirm (it crosses itself, or a component has no genus)",
+            side.name()
+        ));
+    }
+    if side == Side::Inside && crossings.is_empty() {
+        let enclosed = surface.signed_volume();
+        let meshed = mesh.volume();
+        if (meshed / enclosed - 1.0).abs() > VOLUME_TOLERANCE {
+            warnings.push(format!(
+                "the inside volume mesh holds {:.1} % of the volume the surface encloses ({meshed:.4e} of {enclosed:.4e}): parts thinner than its cells are lost or merged; a smaller --h may help",
+                100.0 * meshed / enclosed
+            ));
+        }
+    }
+    if matches == Some(false) {
+        warnings.push(format!(
+            "the {} volume mesh's topology ({found}) differs from the surface's ({}) after {rounds} meshing{}: features below the resolution; a smaller --h may help",
+            side.name(),
+            expected.as_ref().map_or(String::new(), |e| e.to_string()),
+            if rounds == 1 { "" } else { "s" },
+        ));
+    }
+    if let Some(s) = stats {
+        if let Some(floor) = s.spacing_floor {
+            warnings.push(format!(
+                "the tet budget ({} tets) kept cells of the {} volume mesh from going below {floor:.3e}: parts or gaps thinner than {:.3e} may have lost their topology (raise --max-tets)",
+                options.max_tets,
+                side.name(),
+                CELLS_ACROSS * floor
+            ));
+        }
+        let q = s.quality;
+        if q.below_target_after > 0 {
+            warnings.push(format!(
+                "{} tets of the {} volume mesh keep a dihedral angle below {}° (smallest {:.2}°)",
+                q.below_target_after,
+                side.name(),
+                q.target_deg,
+                q.min_dihedral_after_deg
+            ));
+        }
+    }
+    let hausdorff = hausdorff_to_surface(&mesh, distance) / diagonal;
+
+    Ok(VolumeResult {
+        mesh,
+        side,
+        h,
+        sphere: (side == Side::Outside).then_some((centre, radius)),
+        mesher: options.mesher,
+        stats,
+        thin_vertices,
+        topology: TopologyCheck {
+            expected,
+            found,
+            matches,
+            rounds,
+        },
+        hausdorff_to_surface: hausdorff,
+        warnings,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The surface's bounding box, or the error for a surface no volume can be meshed in:
+/// no vertices, no triangles, all at one point.
+fn check_surface(surface: &SurfaceMesh) -> Result<([f64; 3], [f64; 3])> {
+    let invalid = |message: &str| Error::new(ErrorKind::InvalidMesh, message);
+    let (lo, hi) = surface
+        .bounding_box()
+        .ok_or_else(|| invalid("the surface has no vertices"))?;
+    if surface.triangles.is_empty() {
+        return Err(invalid("the surface has no triangles"));
+    }
+    let diagonal = norm(sub(hi, lo));
+    if diagonal.is_nan() || diagonal <= 0.0 {
+        return Err(invalid("the surface is a single point"));
+    }
+    Ok((lo, hi))
+}
+
+/// The stuffing mesher on one side of the surface (`sphere`: the outer sphere's centre
+/// and radius for the shell, `None` inside): thickness and gaps measured into sizing
+/// features, creases (and the curve where the surface crosses itself) to snap onto,
+/// then meshings until the topology matches. Returns the mesh, its topology, the
+/// number of thin vertices and the rounds.
+#[allow(clippy::too_many_arguments)]
+fn stuff_surface(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    crossings: &[[u32; 2]],
+    sphere: Option<([f64; 3], f64)>,
+    h: f64,
+    options: &VolumeOptions,
+    expected: &Option<TetTopology>,
+    warnings: &mut Vec<String>,
+) -> Result<(VolumeMesh, TetTopology, usize, usize)> {
+    // Where the surface crosses itself a "thickness" measures the crossing: the
+    // crossing triangles and the ring around them are not sized.
+    let mut crossing = vec![false; surface.num_vertices()];
+    for f in crossings.iter().flatten() {
+        for &v in &surface.triangles[*f as usize] {
+            crossing[v as usize] = true;
+        }
+    }
+    let ring: Vec<u32> = surface
+        .triangles
+        .iter()
+        .filter(|t| t.iter().any(|&v| crossing[v as usize]))
+        .flatten()
+        .copied()
+        .collect();
+    for v in ring {
+        crossing[v as usize] = true;
+    }
+    let topology = Topology::new(surface);
+    let thickness = thickness(surface, &topology, distance, &crossing, THIN_FACTOR * h);
+    let thin_vertices = thickness
+        .iter()
+        .filter(|t| t.iter().any(|x| x.is_finite()))
+        .count();
+    let mut spacing: Vec<f64> = thickness
+        .iter()
+        .map(|t| (t[0].min(t[1]) / CELLS_ACROSS).min(h))
+        .collect();
+    // Where the surface crosses itself, the solid's boundary has a crease along the
+    // crossing curve (two overlapping balls meet in a concave ring): it is snapped onto
+    // like any crease, with cells finer there so that the mesh's edges follow it
+    // instead of zigzagging across it.
+    let crossing_curve: Vec<[[f64; 3]; 2]> = crossings
+        .iter()
+        .filter_map(|&[f, g]| {
+            crate::distance::crossing_segment(
+                surface.corners(f as usize),
+                surface.corners(g as usize),
+            )
+        })
+        .collect();
+    let mut features = sharp_features(surface, &topology);
+    features.edges.extend(&crossing_curve);
+    let mut sizing = thin_part_sizing(surface, &thickness);
+    let crease_cell = h / CROSSING_REFINEMENT;
+    sizing.extend(crossing_curve.iter().map(|&[p, q]| SizingFeature {
+        corners: [p, q, q],
+        spacing: crease_cell,
+        reach: 2.0 * crease_cell,
+        toward: [0.0; 3],
+    }));
+    let stuffing = StuffingOptions {
+        h,
+        max_tets: options.max_tets,
+        min_dihedral_deg: options.min_dihedral_deg,
+    };
+    if sphere.is_none() {
+        refuse_if_all_below_floor(&sizing, &thickness, &stuffing)?;
+    }
+    let bounds = surface.bounding_box().unwrap_or_default();
+    // One meshing with the surface's sizing and `extra` (refinements from earlier
+    // rounds), inside or in the shell.
+    let stuff = |extra: &[SizingFeature]| {
+        let inside = SurfaceInside {
+            distance,
+            bounds,
+            sizing: sizing.iter().chain(extra).copied().collect(),
+            features: features.clone(),
+        };
+        match sphere {
+            None => stuff_volume(&inside, &stuffing),
+            Some((centre, radius)) => stuff_volume(&Shell::new(inside, centre, radius), &stuffing),
+        }
+    };
+    let (stuffed, found, rounds) =
+        mesh_until_topology_matches(surface, &stuff, &mut spacing, expected, warnings)?;
+    Ok((stuffed, found, thin_vertices, rounds))
+}
+
+/// Mesh, compare with the prediction, refine where the mesh shows a feature below the
+/// resolution, and mesh again while the topology differs (at most [`MAX_ROUNDS`]
+/// meshings), keeping the mesh closest to the prediction; a round that moves away from
+/// it ends the rounds. `spacing[v]` is the cell size asked for at surface vertex `v`
+/// (halved where a round refines). A refinement the budget refuses ends the rounds with
+/// the best mesh so far, and says so in `warnings`.
+fn mesh_until_topology_matches(
+    surface: &SurfaceMesh,
+    stuff: &dyn Fn(&[SizingFeature]) -> Result<VolumeMesh>,
+    spacing: &mut [f64],
+    expected: &Option<TetTopology>,
+    warnings: &mut Vec<String>,
+) -> Result<(VolumeMesh, TetTopology, usize)> {
+    let stuffed = stuff(&[])?;
+    let found = stuffed.mesh.topology();
+    let Some(expected) = expected else {
+        return Ok((stuffed, found, 1));
+    };
+    let mut best_distance = topology_distance(&found, expected);
+    // Where the budget already floors the spacing, finer cells are out of reach.
+    let floored = stuffed.stats.spacing_floor.is_some();
+    let mut best = (stuffed, found);
+    let mut extra = Vec::new();
+    let mut rounds = 1;
+    while best_distance > 0 && rounds < MAX_ROUNDS && !floored {
+        let refine = unresolved_features(surface, &best.0, spacing);
+        if refine.is_empty() {
+            break;
+        }
+        extra.extend(refine);
+        rounds += 1;
+        let next = match stuff(&extra) {
+            Ok(next) => next,
+            Err(e) if e.kind() == ErrorKind::OverBudget => {
+                warnings.push(format!(
+                    "refinement for topology stopped at the tet budget: {}",
+                    e.message()
+                ));
+                break;
+            }
+            Err(e) => return Err(e),
+        };
+        let found = next.mesh.topology();
+        let distance = topology_distance(&found, expected);
+        if distance > best_distance {
+            break;
+        }
+        if distance < best_distance {
+            best_distance = distance;
+            best = (next, found);
+        }
+    }
+    Ok((best.0, best.1, rounds))
+}
+
+/// Refuse at once when the budget floors the spacing above the thickness of every part
+/// of the solid: the mesh would be empty (or nearly), after all the work.
+fn refuse_if_all_below_floor(
+    sizing: &[SizingFeature],
+    thickness: &[[f64; 2]],
+    options: &StuffingOptions,
+) -> Result<()> {
+    let Some(floor) = spacing_floor(sizing, options) else {
+        return Ok(());
+    };
+    let thickest = thickness.iter().map(|t| t[0]).fold(0.0, f64::max);
+    if thickest < floor {
+        return Err(Error::new(
+            ErrorKind::OverBudget,
+            format!(
+                "every part of the solid is thinner than {thickest:.3e}, but the budget of {} tets allows no cells below {floor:.3e}: raise it with --max-tets",
+                options.max_tets
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// How far one topology is from another: the differences in components, χ, boundary
+/// surfaces and their χ (0 exactly when they agree, up to the order of components).
+fn topology_distance(a: &TetTopology, b: &TetTopology) -> i64 {
+    if a == b {
+        return 0;
+    }
+    let components = (a.components.len() as i64 - b.components.len() as i64).abs();
+    let boundary = (a.boundary_components() as i64 - b.boundary_components() as i64).abs();
+    (components
+        + boundary
+        + (a.euler() - b.euler()).abs()
+        + (a.boundary_euler() - b.boundary_euler()).abs())
+    .max(1)
+}
+
+/// Where a mesh shows features below its resolution, as sizing features at half the
+/// spacing used there: its pinch sites, its swallowed boundary vertices, and the surface
+/// vertices its boundary does not come within half a cell of (a thin part lost, or a
+/// gap closed). Halves `spacing` at those vertices.
+fn unresolved_features(
+    surface: &SurfaceMesh,
+    stuffed: &VolumeMesh,
+    spacing: &mut [f64],
+) -> Vec<SizingFeature> {
+    let mut out: Vec<SizingFeature> = stuffed
+        .pinches
+        .iter()
+        .chain(&stuffed.swallowed)
+        .map(|&(p, s)| SizingFeature::point(p, 0.5 * s, 2.0 * s))
+        .collect();
+    let mesh = &stuffed.mesh;
+    let boundary = SurfaceDistance::new(&SurfaceMesh {
+        positions: mesh.positions.clone(),
+        triangles: mesh.boundary_faces(),
+    });
+    let gaps = boundary.distances(&surface.positions);
+    for (v, gap) in gaps.into_iter().enumerate() {
+        if gap > 0.5 * spacing[v] {
+            let s = spacing[v];
+            out.push(SizingFeature::point(surface.positions[v], 0.5 * s, 2.0 * s));
+            spacing[v] = 0.5 * s;
+        }
+    }
+    out
+}
+
+/// Largest distance of a surface-kind vertex of `mesh` to the input surface.
+fn hausdorff_to_surface(mesh: &TetMesh, distance: &SurfaceDistance) -> f64 {
+    let surface_vertices: Vec<[f64; 3]> = mesh
+        .positions
+        .iter()
+        .zip(&mesh.kinds)
+        .filter(|(_, k)| **k == VertexKind::Surface)
+        .map(|(p, _)| *p)
+        .collect();
+    distance
+        .distances(&surface_vertices)
+        .into_iter()
+        .fold(0.0, f64::max)
+}
+
+#[cfg(feature = "tetgen")]
+fn tetgen_mesh(
+    surface: &SurfaceMesh,
+    side: Side,
+    centre: [f64; 3],
+    radius: f64,
+) -> Result<TetMesh> {
+    match side {
+        Side::Inside => super::tetgen::mesh_inside(surface),
+        Side::Outside => super::tetgen::mesh_shell(surface, centre, radius),
+    }
+}
+
+#[cfg(not(feature = "tetgen"))]
+fn tetgen_mesh(_: &SurfaceMesh, _: Side, _: [f64; 3], _: f64) -> Result<TetMesh> {
+    Err(Error::invalid_argument(
+        "this necklace was built without the `tetgen` feature (cargo build --features tetgen; AGPL-3.0)",
+    ))
+}
