@@ -206,7 +206,11 @@ fn h_series(
         .iter()
         .find(|f| model_name(f).contains(wanted))
         .or(if model.is_none() { files.first() } else { None })
-        .with_context(|| format!("no model named like '{wanted}' for the h series"))?;
+        .ok_or_else(|| {
+            necklace::Error::invalid_argument(format!(
+                "no model named like '{wanted}' for the h series (--scaling)"
+            ))
+        })?;
     let name = model_name(file);
     let surface = pipeline::prepare_input(io::read_mesh(file)?)?.mesh;
     let diagonal = surface.bbox_diagonal();

@@ -62,13 +62,12 @@ fn main() -> ExitCode {
         Ok(text) => print::stdout(&text),
         Err(err) => {
             eprintln!("necklace: {}", printable(&format!("{err:#}")));
-            // Library errors are about the input, the arguments or the files named:
-            // status 2; anything else is ours: 1.
-            if err.downcast_ref::<necklace::Error>().is_some() {
-                ExitCode::from(2)
-            } else {
-                ExitCode::from(1)
-            }
+            // Errors about the input, the arguments or the files named: status 2;
+            // anything else is ours: 1.
+            let input = err
+                .downcast_ref::<necklace::Error>()
+                .is_some_and(necklace::Error::is_input_error);
+            ExitCode::from(if input { 2 } else { 1 })
         }
     }
 }

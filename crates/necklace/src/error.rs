@@ -36,6 +36,10 @@ pub enum ErrorKind {
     /// The work would exceed a size budget (e.g. the volume mesh's tet count); the
     /// message names the figure and the option that lifts the budget.
     OverBudget,
+    /// A failure that is not the input's: a dependency returned inconsistent output,
+    /// an encoder failed on valid data. The CLI exits with status 1 and asks for a
+    /// report.
+    Internal,
 }
 
 /// Where in the input an error was found.
@@ -123,10 +127,12 @@ impl Error {
         &self.message
     }
 
-    /// True for errors caused by the input or the caller's arguments (as opposed to
-    /// the environment, such as an unreadable file). Used by the CLI for exit codes.
+    /// True for errors caused by what the caller gave: the input, the arguments, the
+    /// files named (unreadable, unwritable) or a budget; false for an
+    /// [`ErrorKind::Internal`] failure. The CLI exits with status 2 for the first, 1
+    /// for the second.
     pub fn is_input_error(&self) -> bool {
-        self.kind != ErrorKind::Io
+        self.kind != ErrorKind::Internal
     }
 }
 
@@ -202,6 +208,14 @@ pub fn printable(text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_internal_failures_are_not_the_callers() {
+        for kind in [ErrorKind::Io, ErrorKind::Syntax, ErrorKind::OverBudget] {
+            assert!(Error::new(kind, "x").is_input_error(), "{kind:?}");
+        }
+        assert!(!Error::new(ErrorKind::Internal, "x").is_input_error());
+    }
 
     #[test]
     fn display_is_one_line_with_source_and_location() {

@@ -268,7 +268,7 @@ impl Image {
             encoder.set_color(png::ColorType::Rgb);
             encoder.set_depth(png::BitDepth::Eight);
             let fail = |e: png::EncodingError| {
-                Error::new(ErrorKind::Io, format!("cannot encode PNG: {e}"))
+                Error::new(ErrorKind::Internal, format!("cannot encode PNG: {e}"))
             };
             let mut writer = encoder.write_header().map_err(fail)?;
             writer

@@ -378,7 +378,7 @@ fn run_tetgen(
             ));
         }
         if tg.out_cell_npoint() != 4 {
-            return Err(tetgen_failed(format!(
+            return Err(tetgen_broke(format!(
                 "{} nodes per tetrahedron, expected 4",
                 tg.out_cell_npoint()
             )));
@@ -392,7 +392,7 @@ fn run_tetgen(
             for (m, slot) in tet.iter_mut().enumerate() {
                 let v = tg.out_cell_point(c, m);
                 if v >= npoint {
-                    return Err(tetgen_failed(format!(
+                    return Err(tetgen_broke(format!(
                         "tetrahedron {c} uses point {v} of {npoint}"
                     )));
                 }
@@ -510,4 +510,12 @@ fn tritet_error(message: &'static str) -> Error {
 
 fn tetgen_failed(message: String) -> Error {
     Error::new(ErrorKind::InvalidMesh, format!("TetGen failed: {message}"))
+}
+
+/// TetGen's output is inconsistent: not the input's fault.
+fn tetgen_broke(message: String) -> Error {
+    Error::new(
+        ErrorKind::Internal,
+        format!("TetGen returned a broken mesh: {message}"),
+    )
 }
