@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use necklace::morse::{MorseOptions, Schedule};
 use necklace::pipeline::{self, find_necks_with_progress, NeckOptions, NeckReport};
 use necklace::render::chart::{chart, Chart, Series};
