@@ -1,0 +1,217 @@
+//! Step 2 of the tightening: the shortest closed path homotopic to the strip's core.
+//! [`shortest_closed_path`] reads as its three parts: choose the anchor portal
+//! ([`choose_anchor`]: where the last path crossed farthest from a vertex), find the
+//! anchor parameter that minimises the length (the length is convex in it; a
+//! safeguarded regula falsi on its slope, `geom::illinois_root`), and turn the funnel
+//! path back into one crossing per portal ([`portal_crossings`]).
+//!
+//! Conventions: portal parameters run from the left vertex (0) to the right one (1) in
+//! the unfolding, and from the edge's first stored vertex in a [`PortalCrossing`].
+
+use super::unfold::{cross2, dist2, funnel, length_and_slope, lerp2, unfold, Apex, Portal2};
+use super::{PortalCrossing, Strip, StripPath, SurfaceGeometry};
+use crate::geom::{illinois_root, lerp};
+
+/// The anchor search stops when its bracket of the strip parameter is narrower than
+/// this.
+const SLOPE_BRACKET: f64 = 1e-13;
+
+/// Most evaluations of the anchor search.
+const SLOPE_STEPS: usize = 100;
+
+/// A crossing within this portal parameter of an endpoint is at that vertex: rounding
+/// must not leave a point a hair away from a vertex the path really passes through.
+const VERTEX_SNAP: f64 = 1e-9;
+
+/// A portal's far end lies on the path's segment (the path runs along the portal's
+/// edge) when its distance from the segment's line is below this fraction of the
+/// lengths involved.
+const ALONG_TOLERANCE: f64 = 1e-8;
+
+/// A path segment is parallel to a portal when the cross product of their directions
+/// is below this fraction of their lengths' product.
+const PARALLEL_TOLERANCE: f64 = 1e-12;
+
+/// The shortest closed path homotopic to the strip's core, with its crossings (and the
+/// strip's hints updated to them). `None` when the strip cannot be unfolded.
+pub(super) fn shortest_closed_path(
+    geometry: &SurfaceGeometry,
+    strip: &mut Strip,
+) -> Option<StripPath> {
+    let n = strip.portals.len();
+    if n < 2 {
+        return None;
+    }
+    let anchor = choose_anchor(strip);
+    let portals = unfold(geometry, strip, anchor)?;
+    let (t, path, length) = shortest_through(&portals);
+    let crossings = portal_crossings(geometry, strip, anchor, &portals, &path, t)?;
+    for (i, c) in crossings.iter().enumerate() {
+        strip.hint[i] = if c.vertex.is_some() { f64::NAN } else { c.t };
+    }
+    Some(StripPath { crossings, length })
+}
+
+/// The portal whose previous crossing is farthest from both its endpoints (the first
+/// such; an unknown crossing counts as at an endpoint).
+fn choose_anchor(strip: &Strip) -> usize {
+    let score = |k: usize| {
+        let t = strip.hint[k];
+        if t.is_nan() {
+            1.0
+        } else {
+            (t - 0.5).abs()
+        }
+    };
+    (0..strip.portals.len())
+        .min_by(|&i, &j| score(i).total_cmp(&score(j)).then(i.cmp(&j)))
+        .unwrap_or(0)
+}
+
+/// The anchor parameter `t` of the shortest path from the first portal to its image on
+/// the last, the funnel path there and its length. The length is convex in `t`:
+/// regula falsi (Illinois) on its slope, or an end where the slope does not change sign.
+fn shortest_through(portals: &[Portal2]) -> (f64, Vec<Apex>, f64) {
+    let n = portals.len() - 1;
+    let (p0, pn) = (portals[0], portals[n]);
+    let ds = [p0.right[0] - p0.left[0], p0.right[1] - p0.left[1]];
+    let dg = [pn.right[0] - pn.left[0], pn.right[1] - pn.left[1]];
+    let eval = |t: f64| {
+        let (s, g, end_vertex) = if t == 0.0 {
+            (p0.left, pn.left, Some(p0.lv))
+        } else if t == 1.0 {
+            (p0.right, pn.right, Some(p0.rv))
+        } else {
+            (
+                lerp2(p0.left, p0.right, t),
+                lerp2(pn.left, pn.right, t),
+                None,
+            )
+        };
+        let path = funnel(s, g, portals, end_vertex);
+        let (len, slope) = length_and_slope(&path, ds, dg);
+        (path, len, slope)
+    };
+    let (_, _, s0) = eval(0.0);
+    let (_, _, s1) = eval(1.0);
+    let t = if s0 >= 0.0 {
+        0.0
+    } else if s1 <= 0.0 {
+        1.0
+    } else {
+        illinois_root(|t| eval(t).2, s0, s1, 0.0, SLOPE_BRACKET, SLOPE_STEPS)
+    };
+    let (path, length, _) = eval(t);
+    (t, path, length)
+}
+
+/// One crossing per strip portal (in strip order) of the funnel `path` through the
+/// unfolded `portals` (index `k` ↔ strip portal `(anchor + k) % n`), the anchor at
+/// parameter `t`. A portal the path touches at an endpoint is crossed at that vertex; a
+/// portal whose edge the path runs along counts as crossed where that run ends.
+fn portal_crossings(
+    geometry: &SurfaceGeometry,
+    strip: &Strip,
+    anchor: usize,
+    portals: &[Portal2],
+    path: &[Apex],
+    t: f64,
+) -> Option<Vec<PortalCrossing>> {
+    let n = strip.portals.len();
+    let mut by_k: Vec<Option<PortalCrossing>> = vec![None; n];
+    let mk = |k: usize, s: f64, vertex: Option<u32>| {
+        let pt = portals[k];
+        let e = strip.portals[(anchor + k) % n];
+        let [a, b] = geometry.edge(e);
+        // s runs from left to right.
+        let t = if pt.lv == a { s } else { 1.0 - s };
+        let point = match vertex {
+            Some(v) => geometry.pos(v),
+            None => lerp(geometry.pos(a), geometry.pos(b), t),
+        };
+        let t = match vertex {
+            Some(v) if v == a => 0.0,
+            Some(_) => 1.0,
+            None => t,
+        };
+        PortalCrossing { t, vertex, point }
+    };
+    let at_end = |s: f64, pt: Portal2| {
+        if s <= VERTEX_SNAP {
+            Some(pt.lv)
+        } else if s >= 1.0 - VERTEX_SNAP {
+            Some(pt.rv)
+        } else {
+            None
+        }
+    };
+    by_k[0] = Some(mk(0, t, at_end(t, portals[0])));
+    for seg in path.windows(2) {
+        let (a, b) = (seg[0], seg[1]);
+        for k in a.index.max(1)..=b.index.min(n - 1) {
+            if by_k[k].is_some() {
+                continue;
+            }
+            let pt = portals[k];
+            let touches = |x: &Apex| {
+                x.vertex.and_then(|v| {
+                    if pt.lv == v && pt.left == x.pos {
+                        Some((0.0, v))
+                    } else if pt.rv == v && pt.right == x.pos {
+                        Some((1.0, v))
+                    } else {
+                        None
+                    }
+                })
+            };
+            // A portal holding both bend points is the edge the path runs along: it
+            // counts as crossed where that run ends, so each vertex's run starts with
+            // the edge it is entered along.
+            let hit = touches(&b).or_else(|| {
+                let (s, v) = touches(&a)?;
+                // From `a` along this very edge: the path passes its other end too.
+                let (w, wv) = if s == 0.0 {
+                    (pt.right, pt.rv)
+                } else {
+                    (pt.left, pt.lv)
+                };
+                let along = cross2(a.pos, b.pos, w).abs()
+                    <= ALONG_TOLERANCE * dist2(a.pos, b.pos) * dist2(a.pos, w)
+                    && dist2(a.pos, w) <= dist2(a.pos, b.pos);
+                Some(if along { (1.0 - s, wv) } else { (s, v) })
+            });
+            let c = if let Some((s, v)) = hit {
+                mk(k, s, Some(v))
+            } else {
+                let d = [b.pos[0] - a.pos[0], b.pos[1] - a.pos[1]];
+                let e = [pt.right[0] - pt.left[0], pt.right[1] - pt.left[1]];
+                let den = e[0] * d[1] - e[1] * d[0];
+                let scale = dist2(a.pos, b.pos) * dist2(pt.left, pt.right);
+                let s = if den.abs() > PARALLEL_TOLERANCE * scale {
+                    let w = [a.pos[0] - pt.left[0], a.pos[1] - pt.left[1]];
+                    ((w[0] * d[1] - w[1] * d[0]) / den).clamp(0.0, 1.0)
+                } else if dist2(pt.left, b.pos) <= dist2(pt.right, b.pos) {
+                    // The path runs along this edge: it passes its endpoint nearer
+                    // the next bend point.
+                    0.0
+                } else {
+                    1.0
+                };
+                mk(k, s, at_end(s, pt))
+            };
+            by_k[k] = Some(c);
+        }
+    }
+    let mut crossings = vec![
+        PortalCrossing {
+            t: f64::NAN,
+            vertex: None,
+            point: [f64::NAN; 3]
+        };
+        n
+    ];
+    for (k, c) in by_k.into_iter().enumerate() {
+        crossings[(anchor + k) % n] = c?;
+    }
+    Some(crossings)
+}
