@@ -32,7 +32,7 @@ pub struct NeckLoop {
     pub membrane: SurfaceMesh,
     /// Signed distance along the cutting normal from the saddle to the plane that gave
     /// that loop: 0 unless the plane through the saddle had no curve around it, or a
-    /// parallel plane gave a shorter loop of a cycle's class ([`LoopOptions::slide_steps`]).
+    /// parallel plane gave a shorter loop of a cycle's class ([`LoopOptions::slide_steps`](super::LoopOptions::slide_steps)).
     pub plane_offset: f64,
     /// Length-weighted centroid of the polyline.
     pub center: [f64; 3],
@@ -66,7 +66,7 @@ pub struct NeckLoop {
     /// Separating: the areas of the two sides it cuts its surface component into,
     /// smaller first.
     pub areas: Option<[f64; 2]>,
-    /// How much the surface opens out on each side, smaller first (module [`opening`]):
+    /// How much the surface opens out on each side, smaller first (module [`opening`](super::opening)):
     /// how much longer than the loop the curve one loop radius away is (0 on a
     /// cylinder, positive on both sides of a neck). `None` where it cannot be measured.
     pub opening: Option<[f64; 2]>,
@@ -119,7 +119,7 @@ pub enum DropReason {
         closed_curves: usize,
         /// Open curves (the surface has a boundary there).
         open_curves: usize,
-        /// Parallel planes also tried, on each side ([`LoopOptions::plane_offsets`]).
+        /// Parallel planes also tried, on each side ([`LoopOptions::plane_offsets`](super::LoopOptions::plane_offsets)).
         offsets_tried: usize,
         /// Their spacing, in the surface's units.
         offset_step: f64,
@@ -189,8 +189,8 @@ pub enum DropReason {
     },
     /// A separating saddle whose lobe bulges less than `min_bulge`, and is no fatter
     /// than the neck at all (bulge ≤ 1), or whose loop does not open out by
-    /// [`LoopOptions::min_opening`] on both sides (a bump on a tube), or goes round a
-    /// flat part ([`LoopOptions::max_flatness`]): not a neck.
+    /// [`LoopOptions::min_opening`](super::LoopOptions::min_opening) on both sides (a bump on a tube), or goes round a
+    /// flat part ([`LoopOptions::max_flatness`](super::LoopOptions::max_flatness)): not a neck.
     NotANeck {
         /// Its lobe's bulge ratio.
         bulge: Option<f64>,
