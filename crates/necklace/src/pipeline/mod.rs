@@ -151,6 +151,7 @@ pub fn find_necks_with_progress(
     // 1. The input, once: repaired, oriented, its problems said, its distance
     //    structure built for every stage of the run.
     let prepared = prepare_input(surface.clone())?;
+    let surface_report = MeshReport::new(&prepared.mesh);
     let mut report = NeckReport::new(&prepared);
     report.timings.input = clock.lap();
     // 2–6. Each side asked for, inside (handles) first.
@@ -160,7 +161,7 @@ pub fn find_necks_with_progress(
             Side::Outside => options.tunnels,
         };
         if wanted {
-            let found = find_side(&prepared, side, options, progress)?;
+            let found = find_side(&prepared, &surface_report, side, options, progress)?;
             report.add_side(found);
         }
     }
@@ -168,9 +169,11 @@ pub fn find_necks_with_progress(
     Ok(report)
 }
 
-/// One side of the method on a prepared surface: steps 2–6 of [`find_necks`].
+/// One side of the method on a prepared surface (`surface_report`: its report, for the
+/// genus the checks compare with): steps 2–6 of [`find_necks`].
 fn find_side(
     prepared: &PreparedSurface,
+    surface_report: &MeshReport,
     side: Side,
     options: &NeckOptions,
     progress: &dyn Progress,
@@ -227,7 +230,6 @@ fn find_side(
     };
 
     // 6. The Morse and homology checks.
-    let surface_report = MeshReport::new(surface);
     let genus = surface_report
         .component_details
         .iter()
@@ -254,7 +256,7 @@ fn find_side(
     let morse_check = MorseCheck {
         side,
         ok: result.morse_failures().next().is_none(),
-        surface_morse_expected: surface_morse_expected(&surface_report, side),
+        surface_morse_expected: surface_morse_expected(surface_report, side),
         morse_expected: result.morse_expected,
         cycles_ok: cycle_failure.is_none(),
         cycle_rank: result.cycle_rank,

@@ -303,9 +303,13 @@ pub fn volume_mesh_with(
     let centre = scale(add(lo, hi), 0.5);
     let radius = options.sphere_scale * 0.5 * diagonal;
     let mut warnings = Vec::new();
+    let found;
     let crossings = match distance.crossings() {
-        Some(found) => found.to_vec(),
-        None => distance.self_intersections(&surface.triangles),
+        Some(recorded) => recorded,
+        None => {
+            found = distance.self_intersections(&surface.triangles);
+            &found[..]
+        }
     };
     let expected = if crossings.is_empty() {
         predict(surface, side)
@@ -323,7 +327,7 @@ pub fn volume_mesh_with(
             let (stuffed, found, thin_vertices, rounds) = stuff_surface(
                 surface,
                 distance,
-                &crossings,
+                crossings,
                 sphere,
                 h,
                 options,
