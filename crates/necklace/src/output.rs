@@ -6,8 +6,11 @@
 //! A run's folder ([`write_run`]):
 //! - `loops.obj`: each loop a closed `l` polyline, named `handle_3` / `tunnel_5` after its
 //!   kind and index (Blender, MeshLab, any OBJ reader);
-//! - `loops.ply`: the same loops as PLY vertices and edges, each carrying `loop` (its
-//!   index) and its kind's colour (MeshLab, ParaView, CloudCompare);
+//! - `loops.ply`: the same loops as PLY vertices and bare edges, each vertex carrying
+//!   `loop` (its loop's index) and its kind's colour (trimesh, MeshLab, CloudCompare);
+//! - `loops.vtp`: the loops as VTK polylines with cell data `loop` and `kind` (0
+//!   handle, 1 tunnel; ParaView, pyvista); `loops.vtu`: the same as 2-point line cells
+//!   (meshio, which reads no `.vtp`);
 //! - `membranes.ply`: a disk each loop bounds (see `NeckLoop::membrane`), one component
 //!   per loop, each face carrying `loop` (the loop's index);
 //! - `loops.json`: the whole report with a `version` field (schema: `docs/output.md`);
@@ -19,7 +22,8 @@
 //!   smoothed field and the side per vertex, for ParaView) with the volume kept.
 //!
 //! Units: the input mesh's; coordinates in its frame. Entry points: [`write_run`],
-//! [`report_json`], [`loop_scene`], [`read_loops_json`], [`read_points_json`].
+//! [`report_json`] and back [`read_report_json`], [`loop_scene`], [`read_loops_json`],
+//! [`read_points_json`].
 
 use std::path::{Path, PathBuf};
 
@@ -79,6 +83,19 @@ pub fn report_json(report: &NeckReport, input: Option<&Path>) -> Result<Value> {
         out.extend(fields);
     }
     Ok(out)
+}
+
+/// Read a report back from the JSON of [`report_json`] (a `loops.json`). Fields the
+/// JSON leaves out (the surface, membranes, critical points, volume fields) are empty.
+pub fn report_from_json(value: Value) -> Result<NeckReport> {
+    serde_json::from_value(value)
+        .map_err(|e| Error::new(ErrorKind::Syntax, format!("not a necklace report: {e}")))
+}
+
+/// [`report_from_json`] of a file.
+pub fn read_report_json(path: impl AsRef<Path>) -> Result<NeckReport> {
+    let path = path.as_ref();
+    report_from_json(read_json(path)?).map_err(|e| e.in_file(path))
 }
 
 /// A loop as drawn: its kind and points.
@@ -233,6 +250,13 @@ pub fn write_run(
     let colors: Vec<[u8; 3]> = curves.iter().map(|c| kind_color(c.kind)).collect();
     io::write_polylines_ply(&path, &lines, &colors)?;
     written.push(path);
+
+    let kinds: Vec<i32> = curves.iter().map(|c| side_code(c.kind) as i32).collect();
+    for name in ["loops.vtp", "loops.vtu"] {
+        let path = dir.join(name);
+        io::write_polylines_vtk(&path, &lines, &kinds)?;
+        written.push(path);
+    }
 
     if !report.loops.is_empty() {
         let path = dir.join("membranes.ply");

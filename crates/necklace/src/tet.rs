@@ -13,14 +13,14 @@
 use std::collections::HashMap;
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{cross, dot, norm, sub};
 use crate::mesh::{check_finite, find, union, Csr};
 
 /// Where a vertex of a tet mesh lies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum VertexKind {
     /// Strictly inside the meshed region.
@@ -409,14 +409,14 @@ struct EulerScratch {
 /// components, each with its Euler characteristic and those of its boundary surfaces.
 /// Components are sorted (by χ, then by their boundary list), so two topologies
 /// compare equal exactly when they agree component by component.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct TetTopology {
     /// One entry per connected component.
     pub components: Vec<ComponentTopology>,
 }
 
 /// One connected component of a [`TetTopology`].
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct ComponentTopology {
     /// χ = V − E + F − T of the component (for a 3-manifold, half the sum of its
     /// boundary surfaces' χ).

@@ -30,6 +30,7 @@ mod ply;
 mod stl;
 mod tetgen;
 mod text;
+mod vtk;
 mod vtu;
 
 use std::path::Path;
@@ -301,9 +302,10 @@ pub fn write_polylines(
     crate::file::write_atomic(path, polylines_obj(polylines, names).as_bytes())
 }
 
-/// Write closed polylines as binary PLY with an `edge` element: every vertex and edge
-/// carries the index of its polyline (`loop`), every vertex its polyline's colour
-/// (`colors[i]`, one per polyline).
+/// Write closed polylines as binary PLY with an `edge` element of bare `vertex1`,
+/// `vertex2` pairs (what trimesh and most readers expect of edges); every vertex carries
+/// the index of its polyline (`loop`) and its polyline's colour (`colors[i]`, one per
+/// polyline).
 pub fn write_polylines_ply(
     path: impl AsRef<Path>,
     polylines: &[Vec<[f64; 3]>],
@@ -327,6 +329,37 @@ pub fn write_polylines_ply(
     let mut out = Vec::new();
     ply::write_polylines(polylines, colors, &mut out);
     crate::file::write_atomic(path, &out)
+}
+
+/// Write closed polylines as VTK XML curves, by the file's extension: `.vtp`, PolyData
+/// with one polyline cell each (ParaView, pyvista); `.vtu`, an UnstructuredGrid of
+/// 2-point line cells (meshio, which reads neither PolyData nor polyline cells). Cells
+/// carry `loop` (the polyline's index) and `kind` (`kinds[i]` for polyline `i`).
+pub fn write_polylines_vtk(
+    path: impl AsRef<Path>,
+    polylines: &[Vec<[f64; 3]>],
+    kinds: &[i32],
+) -> Result<()> {
+    let path = path.as_ref();
+    if kinds.len() != polylines.len() {
+        return Err(Error::invalid_argument(format!(
+            "{} kinds for {} polylines",
+            kinds.len(),
+            polylines.len()
+        )));
+    }
+    let data = match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("vtp") => vtk::polylines_vtp(polylines, kinds),
+        Some(e) if e.eq_ignore_ascii_case("vtu") => vtk::segments_vtu(polylines, kinds),
+        _ => {
+            return Err(Error::new(
+                ErrorKind::UnknownFormat,
+                "VTK curves are written as .vtp (polylines) or .vtu (line segments)",
+            )
+            .in_file(path))
+        }
+    };
+    crate::file::write_atomic(path, &data)
 }
 
 /// Write a triangle mesh as binary PLY whose faces carry the `int` property `name`

@@ -733,7 +733,7 @@ pub(crate) fn write_polylines(polylines: &[Vec<[f64; 3]>], colors: &[[u8; 3]], o
         "ply\nformat binary_little_endian 1.0\ncomment closed polylines written by necklace\n\
          element vertex {vertices}\nproperty double x\nproperty double y\nproperty double z\n\
          property int loop\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
-         element edge {edges}\nproperty int vertex1\nproperty int vertex2\nproperty int loop\n\
+         element edge {edges}\nproperty int vertex1\nproperty int vertex2\n\
          end_header\n"
     );
     out.extend_from_slice(header.as_bytes());
@@ -747,13 +747,12 @@ pub(crate) fn write_polylines(polylines: &[Vec<[f64; 3]>], colors: &[[u8; 3]], o
         }
     }
     let mut first = 0usize;
-    for (i, line) in polylines.iter().enumerate() {
+    for line in polylines {
         let n = line.len();
         if n >= 2 {
             for k in 0..n {
                 out.extend_from_slice(&((first + k) as i32).to_le_bytes());
                 out.extend_from_slice(&((first + (k + 1) % n) as i32).to_le_bytes());
-                out.extend_from_slice(&(i as i32).to_le_bytes());
             }
         }
         first += n;

@@ -1,31 +1,35 @@
-//! VTK XML UnstructuredGrid files (`.vtu`) with ascii data arrays.
+//! VTK XML UnstructuredGrid files (`.vtu`): tet meshes with per-vertex fields.
 //!
 //! Reading: a small XML scanner (no external parser) over the tags `<VTKFile
-//! type="UnstructuredGrid">`, one `<Piece>`, and the `<DataArray format="ascii">`
-//! elements of `<Points>` (3 components), `<Cells>` (`connectivity`, `offsets`, `types`)
-//! and `<PointData>`; other elements and attributes, `<?xml?>` declarations and
-//! `<!-- -->` comments (outside data arrays) are ignored. Cells of type 10 (tetra) are
-//! kept, type 24 (quadratic tetra, 10 points) is reduced to its 4 corners, all other
-//! cell types are skipped unchecked. A point data array named `kind` (our writer's)
-//! restores the vertex kinds (0 interior, 1 surface, 2 outer); otherwise kinds are
-//! classified from the boundary. Other point data is ignored.
+//! type="UnstructuredGrid">`, one `<Piece>`, and the `<DataArray>` elements of
+//! `<Points>` (3 components), `<Cells>` (`connectivity`, `offsets`, `types`) and
+//! `<PointData>`; other elements and attributes, `<?xml?>` declarations and `<!-- -->`
+//! comments (outside data arrays) are ignored. Arrays are ascii, or raw appended data
+//! (zlib-compressed or not, UInt32 or UInt64 headers; see [`super::vtk`]). Cells of
+//! type 10 (tetra) are kept, type 24 (quadratic tetra, 10 points) is reduced to its 4
+//! corners, all other cell types are skipped unchecked. A point data array named `kind`
+//! (our writer's) restores the vertex kinds (0 interior, 1 surface, 2 outer); otherwise
+//! kinds are classified from the boundary. Other point data is ignored.
 //!
-//! Binary or appended data, several pieces and other dataset types are
-//! [`ErrorKind::Unsupported`]. Errors carry the line: malformed XML or a missing array is
-//! [`ErrorKind::Syntax`], the file ending inside an element [`ErrorKind::Truncated`],
-//! counts that disagree with `NumberOfPoints`/`NumberOfCells` or with each other
+//! Inline `binary` (base64) arrays, base64-encoded appended data, several pieces and
+//! other dataset types are [`ErrorKind::Unsupported`]. Errors carry the line: malformed
+//! XML or a missing array is [`ErrorKind::Syntax`], the file ending inside an element or
+//! appended data that ends early or does not inflate [`ErrorKind::Truncated`], counts
+//! that disagree with `NumberOfPoints`/`NumberOfCells` or with each other
 //! [`ErrorKind::CountMismatch`], a NaN or infinite coordinate [`ErrorKind::NonFinite`],
 //! a point index or offset out of range [`ErrorKind::IndexOutOfRange`], and no tets
 //! [`ErrorKind::Empty`].
 //!
-//! Writing: `<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian">`,
-//! Points (Float64, Rust's shortest round-trip `{}` formatting), Cells (connectivity and
-//! offsets Int64, types UInt8 = 10), and PointData: `kind` (Int32) and every field
-//! (Float64; a field named `kind`, a repeated name or a non-finite value is rejected).
+//! Writing: binary, all data in one raw appended section of zlib blocks
+//! ([`super::vtk::Appended`]; the kitten's two volume meshes with their field: 4 MB
+//! against 24.7 MB as ascii): Points (Float64), Cells (connectivity and offsets Int64,
+//! types UInt8 = 10), and PointData: `kind` (Int32) and every field (Float64; a field
+//! named `kind`, a repeated name or a non-finite value is rejected).
 
 use std::io::Write;
 
 use super::text;
+use super::vtk::{self, Appended, Layout, Scalar, Values};
 use crate::error::{Error, ErrorKind, Result};
 use crate::tet::TetMesh;
 
@@ -58,13 +62,22 @@ impl Tag<'_> {
     }
 }
 
-/// An ascii data array: its text and where it starts.
+/// A data array: its text (ascii) or where its values are in the appended data.
 struct Array<'a> {
     section: &'a [u8],
     name: String,
     components: i64,
     content: &'a [u8],
+    /// Appended: the offset of its values and their type.
+    appended: Option<(usize, Scalar)>,
     line: usize,
+}
+
+/// The raw appended data of a file and how it is laid out.
+#[derive(Clone, Copy)]
+struct Binary<'a> {
+    blob: &'a [u8],
+    layout: Layout,
 }
 
 /// Read a VTU file.
@@ -78,6 +91,8 @@ pub(crate) fn read(data: &[u8]) -> Result<TetMesh> {
     let mut arrays = Vec::new();
     let mut piece = None;
     let mut root = false;
+    let mut layout = None;
+    let mut blob = None;
     while let Some(tag) = scanner.next_tag()? {
         if tag.closing {
             match open.pop() {
@@ -102,6 +117,10 @@ pub(crate) fn read(data: &[u8]) -> Result<TetMesh> {
             b"VTKFile" => {
                 check_file_type(&tag, !root)?;
                 root = true;
+                layout = Some(
+                    Layout::new(tag.attribute("header_type"), tag.attribute("compressor"))
+                        .map_err(|e| e.at_line(tag.line))?,
+                );
             }
             b"Piece" if piece.is_some() => {
                 return Err(
@@ -114,14 +133,8 @@ pub(crate) fn read(data: &[u8]) -> Result<TetMesh> {
                 let cells = tag.int_attribute("NumberOfCells")?;
                 piece = Some((points, cells, tag.line));
             }
-            b"AppendedData" => {
-                return Err(Error::new(
-                    ErrorKind::Unsupported,
-                    "appended data is not supported (ascii expected)",
-                )
-                .at_line(tag.line))
-            }
-            b"DataArray" if !tag.self_closing => {
+            b"AppendedData" if !tag.self_closing => blob = Some(scanner.appended(&tag)?),
+            b"DataArray" => {
                 let section = open.last().copied().unwrap_or_default();
                 arrays.push(scanner.data_array(&tag, section)?);
                 continue;
@@ -148,6 +161,10 @@ pub(crate) fn read(data: &[u8]) -> Result<TetMesh> {
     let Some((point_count, cell_count, piece_line)) = piece else {
         return Err(Error::new(ErrorKind::Empty, "no <Piece>").at_line(end));
     };
+    let binary = match (blob, layout) {
+        (Some(blob), Some(layout)) => Some(Binary { blob, layout }),
+        _ => None,
+    };
 
     // Points.
     let points = find(&arrays, b"Points", None, end)?;
@@ -158,7 +175,7 @@ pub(crate) fn read(data: &[u8]) -> Result<TetMesh> {
         )
         .at_line(points.line));
     }
-    let coordinates = floats(points)?;
+    let coordinates = floats(points, binary)?;
     if coordinates.len() % 3 != 0 {
         return Err(Error::new(
             ErrorKind::CountMismatch,
@@ -177,10 +194,10 @@ pub(crate) fn read(data: &[u8]) -> Result<TetMesh> {
     check_count(point_count, n, "NumberOfPoints", "points", piece_line)?;
 
     // Cells.
-    let connectivity = ints(find(&arrays, b"Cells", Some("connectivity"), end)?)?;
-    let offsets = ints(find(&arrays, b"Cells", Some("offsets"), end)?)?;
+    let connectivity = ints(find(&arrays, b"Cells", Some("connectivity"), end)?, binary)?;
+    let offsets = ints(find(&arrays, b"Cells", Some("offsets"), end)?, binary)?;
     let types_array = find(&arrays, b"Cells", Some("types"), end)?;
-    let types = ints(types_array)?;
+    let types = ints(types_array, binary)?;
     if offsets.len() != types.len() {
         return Err(Error::new(
             ErrorKind::CountMismatch,
@@ -259,7 +276,7 @@ pub(crate) fn read(data: &[u8]) -> Result<TetMesh> {
     {
         None => None,
         Some(array) => {
-            let codes = ints(array)?;
+            let codes = ints(array, binary)?;
             if codes.len() != n {
                 return Err(Error::new(
                     ErrorKind::CountMismatch,
@@ -351,18 +368,63 @@ fn array_tokens<'a>(array: &Array<'a>) -> impl Iterator<Item = (usize, &'a [u8])
         .flat_map(move |(i, line)| text::tokens(line).map(move |token| (first + i - 1, token)))
 }
 
-/// The values of an array as finite numbers.
-fn floats(array: &Array) -> Result<Vec<f64>> {
-    array_tokens(array)
-        .map(|(line, token)| text::parse_coordinate(token, line))
-        .collect()
+/// The values of an appended array.
+fn appended_values(array: &Array, binary: Option<Binary>) -> Result<Option<Values>> {
+    let Some((offset, scalar)) = array.appended else {
+        return Ok(None);
+    };
+    let Some(binary) = binary else {
+        return Err(Error::new(
+            ErrorKind::Syntax,
+            format!(
+                "array '{}' is appended, but there is no <AppendedData>",
+                array.name
+            ),
+        )
+        .at_line(array.line));
+    };
+    vtk::decode(binary.blob, offset, scalar, binary.layout)
+        .map(Some)
+        .map_err(|e| e.at_line(array.line))
 }
 
-/// The values of an array as integers, each with its line.
-fn ints(array: &Array) -> Result<Vec<(i64, usize)>> {
-    array_tokens(array)
-        .map(|(line, token)| Ok((text::parse_int(token, "value", line)?, line)))
-        .collect()
+/// The values of an array as finite numbers.
+fn floats(array: &Array, binary: Option<Binary>) -> Result<Vec<f64>> {
+    match appended_values(array, binary)? {
+        Some(values) => {
+            let values = match values {
+                Values::Floats(v) => v,
+                Values::Ints(v) => v.into_iter().map(|x| x as f64).collect(),
+            };
+            if let Some(i) = values.iter().position(|x| !x.is_finite()) {
+                return Err(Error::new(
+                    ErrorKind::NonFinite,
+                    format!("array '{}' has a non-finite value at {i}", array.name),
+                )
+                .at_line(array.line));
+            }
+            Ok(values)
+        }
+        None => array_tokens(array)
+            .map(|(line, token)| text::parse_coordinate(token, line))
+            .collect(),
+    }
+}
+
+/// The values of an array as integers, each with its line (an appended array's values
+/// all carry the line of its tag).
+fn ints(array: &Array, binary: Option<Binary>) -> Result<Vec<(i64, usize)>> {
+    match appended_values(array, binary)? {
+        Some(Values::Ints(values)) => Ok(values.into_iter().map(|v| (v, array.line)).collect()),
+        Some(Values::Floats(_)) => Err(Error::new(
+            ErrorKind::Syntax,
+            format!("array '{}' holds floats, integers expected", array.name),
+        )
+        .at_line(array.line)),
+        None => array_tokens(array)
+            .map(|(line, token)| Ok((text::parse_int(token, "value", line)?, line)))
+            .collect(),
+    }
 }
 
 /// A position in the file and its line.
@@ -520,22 +582,66 @@ impl<'a> Scanner<'a> {
         })
     }
 
-    /// The text of the `<DataArray>` just read, up to its end tag.
+    /// The `<DataArray>` just read: its text up to its end tag, or (appended) its
+    /// offset and type.
     fn data_array(&mut self, tag: &Tag, section: &'a [u8]) -> Result<Array<'a>> {
+        let components = tag.int_attribute("NumberOfComponents")?.unwrap_or(1);
+        let name = tag.attribute("Name").unwrap_or_default().to_string();
         match tag.attribute("format").unwrap_or("ascii") {
-            "ascii" => {}
+            "ascii" if !tag.self_closing => {}
+            "ascii" => {
+                return Ok(Array {
+                    section,
+                    name,
+                    components,
+                    content: &[],
+                    appended: None,
+                    line: tag.line,
+                })
+            }
+            "appended" => {
+                let kind = tag.attribute("type").unwrap_or_default();
+                let scalar = Scalar::parse(kind).ok_or_else(|| {
+                    Error::new(
+                        ErrorKind::Unsupported,
+                        format!(
+                            "data type {} is not supported",
+                            text::shown(kind.as_bytes())
+                        ),
+                    )
+                    .at_line(tag.line)
+                })?;
+                let offset = tag.int_attribute("offset")?.ok_or_else(|| {
+                    Error::new(ErrorKind::Syntax, "an appended array without an offset")
+                        .at_line(tag.line)
+                })?;
+                let offset = usize::try_from(offset).map_err(|_| {
+                    Error::new(ErrorKind::Syntax, format!("offset {offset} is negative"))
+                        .at_line(tag.line)
+                })?;
+                if !tag.self_closing {
+                    self.skip_past(b"</DataArray>")?;
+                }
+                return Ok(Array {
+                    section,
+                    name,
+                    components,
+                    content: &[],
+                    appended: Some((offset, scalar)),
+                    line: tag.line,
+                });
+            }
             format => {
                 return Err(Error::new(
                     ErrorKind::Unsupported,
                     format!(
-                        "data array format {} is not supported (ascii expected)",
+                        "data array format {} is not supported (ascii or raw appended expected)",
                         text::shown(format.as_bytes())
                     ),
                 )
                 .at_line(tag.line))
             }
         }
-        let components = tag.int_attribute("NumberOfComponents")?.unwrap_or(1);
         let (start, line) = (self.position, self.line);
         let stop = self.find(b"<").ok_or_else(|| {
             Error::new(ErrorKind::Truncated, "file ends inside a <DataArray>")
@@ -550,11 +656,43 @@ impl<'a> Scanner<'a> {
         }
         Ok(Array {
             section,
-            name: tag.attribute("Name").unwrap_or_default().to_string(),
+            name,
             components,
             content: &self.data[start..stop],
+            appended: None,
             line,
         })
+    }
+
+    /// The raw bytes of the `<AppendedData>` section just opened (after its `_`, up to
+    /// its end tag, where the scanner goes next).
+    fn appended(&mut self, tag: &Tag) -> Result<&'a [u8]> {
+        match tag.attribute("encoding").unwrap_or("raw") {
+            "raw" => {}
+            other => {
+                return Err(Error::new(
+                    ErrorKind::Unsupported,
+                    format!(
+                        "appended data encoding {} is not supported (raw expected)",
+                        text::shown(other.as_bytes())
+                    ),
+                )
+                .at_line(tag.line))
+            }
+        }
+        let truncated = || {
+            Error::new(ErrorKind::Truncated, "file ends inside <AppendedData>")
+                .at_line(text::last_line(self.data))
+        };
+        let start = self.find(b"_").ok_or_else(truncated)? + 1;
+        let end_tag = b"</AppendedData>";
+        let stop = self.data[start..]
+            .windows(end_tag.len())
+            .rposition(|w| w == end_tag)
+            .map(|i| start + i)
+            .ok_or_else(truncated)?;
+        self.advance_to(stop);
+        Ok(&self.data[start..stop])
     }
 }
 
@@ -566,16 +704,6 @@ fn unescape(value: &[u8]) -> String {
         .replace("&quot;", "\"")
         .replace("&apos;", "'")
         .replace("&amp;", "&")
-}
-
-/// Escape text for an attribute value.
-fn escape(value: &str) -> String {
-    value
-        .replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-        .replace('\'', "&apos;")
 }
 
 /// Write a mesh with per-vertex fields (lengths checked by the caller) as VTU.
@@ -595,75 +723,42 @@ pub(crate) fn write(mesh: &TetMesh, fields: &[(&str, &[f64])], out: &mut Vec<u8>
     }
     // Writing into a Vec<u8> cannot fail, so the io::Results below are always Ok.
     let (n, t) = (mesh.positions.len(), mesh.tets.len());
+    let mut data = Appended::default();
+    let kinds: Vec<i32> = mesh
+        .kinds
+        .iter()
+        .map(|&k| super::kind_code(k) as i32)
+        .collect();
+    let points: Vec<f64> = mesh.positions.iter().flatten().copied().collect();
+    let connectivity: Vec<i64> = mesh.tets.iter().flatten().map(|&v| i64::from(v)).collect();
+    let offsets: Vec<i64> = (1..=t as i64).map(|i| 4 * i).collect();
     let _ = writeln!(out, "<?xml version=\"1.0\"?>");
-    let _ = writeln!(
-        out,
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">"
-    );
+    let _ = writeln!(out, "{}", Appended::root("UnstructuredGrid"));
     let _ = writeln!(out, "  <UnstructuredGrid>");
     let _ = writeln!(
         out,
         "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{t}\">"
     );
     let _ = writeln!(out, "      <PointData Scalars=\"kind\">");
-    let _ = writeln!(
-        out,
-        "        <DataArray type=\"Int32\" Name=\"kind\" format=\"ascii\">"
-    );
-    for &kind in &mesh.kinds {
-        let _ = writeln!(out, "{}", super::kind_code(kind));
-    }
-    let _ = writeln!(out, "        </DataArray>");
+    let _ = writeln!(out, "        {}", data.ints("kind", &kinds));
     for (name, values) in fields {
-        let _ = writeln!(
-            out,
-            "        <DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">",
-            escape(name)
-        );
-        for value in *values {
-            let _ = writeln!(out, "{value}");
-        }
-        let _ = writeln!(out, "        </DataArray>");
+        let _ = writeln!(out, "        {}", data.floats(name, 1, values));
     }
     let _ = writeln!(out, "      </PointData>");
     let _ = writeln!(out, "      <Points>");
-    let _ = writeln!(
-        out,
-        "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">"
-    );
-    for [x, y, z] in &mesh.positions {
-        let _ = writeln!(out, "{x} {y} {z}");
-    }
-    let _ = writeln!(out, "        </DataArray>");
+    let _ = writeln!(out, "        {}", data.floats("Points", 3, &points));
     let _ = writeln!(out, "      </Points>");
     let _ = writeln!(out, "      <Cells>");
+    let _ = writeln!(out, "        {}", data.longs("connectivity", &connectivity));
+    let _ = writeln!(out, "        {}", data.longs("offsets", &offsets));
     let _ = writeln!(
         out,
-        "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+        "        {}",
+        data.bytes("types", &vec![VTK_TETRA as u8; t])
     );
-    for [a, b, c, d] in &mesh.tets {
-        let _ = writeln!(out, "{a} {b} {c} {d}");
-    }
-    let _ = writeln!(out, "        </DataArray>");
-    let _ = writeln!(
-        out,
-        "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">"
-    );
-    for i in 1..=t {
-        let _ = writeln!(out, "{}", 4 * i);
-    }
-    let _ = writeln!(out, "        </DataArray>");
-    let _ = writeln!(
-        out,
-        "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">"
-    );
-    for _ in 0..t {
-        let _ = writeln!(out, "{VTK_TETRA}");
-    }
-    let _ = writeln!(out, "        </DataArray>");
     let _ = writeln!(out, "      </Cells>");
     let _ = writeln!(out, "    </Piece>");
     let _ = writeln!(out, "  </UnstructuredGrid>");
-    let _ = writeln!(out, "</VTKFile>");
+    data.finish(out);
     Ok(())
 }

@@ -29,7 +29,7 @@
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::cut::{plane_basis, Crossing};
 use crate::distance::{Closest, SurfaceDistance};
@@ -37,7 +37,7 @@ use crate::geom::{add, dot, lerp, norm, scale, sub};
 use crate::mesh::{SurfaceMesh, Topology};
 
 /// Options of [`membrane_loop`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MembraneOptions {
     /// Ring radii to try, as fractions of the saddle's distance to the surface, in
     /// order; the first whose boundary goes once around the axis wins. Default
@@ -82,7 +82,7 @@ pub struct MembraneLoop {
 }
 
 /// Why no membrane loop was found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MembraneFailure {
     /// The saddle lies on the surface (or the surface has no triangles).

@@ -51,7 +51,7 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
@@ -66,7 +66,7 @@ use tighten::{tighten, SurfaceGeometry};
 pub use tighten::{SurfacePoint, TightenOptions, TightenStatus, Tightened};
 
 /// What the saddle of a seed does to the volume (see `morse::roles`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Role {
     /// It joins two lobes: its loop cuts off a part.
@@ -76,7 +76,7 @@ pub enum Role {
 }
 
 /// Where a loop starts: a selected 2-saddle.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Seed {
     /// Saddle position (a point of the cutting plane).
     pub position: [f64; 3],
@@ -103,7 +103,7 @@ pub struct Seed {
 }
 
 /// Options of [`find_loops`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LoopOptions {
     /// Tightening options.
     pub tighten: TightenOptions,
@@ -165,7 +165,7 @@ pub struct LoopOptions {
 }
 
 /// When the saddle's membrane (module [`membrane`]) gives the initial loop.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MembraneUse {
     /// Never: planes only (the paper).
@@ -178,7 +178,7 @@ pub enum MembraneUse {
 }
 
 /// Which construction gave a loop's initial curve.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Initial {
     /// A plane cut (through the saddle, or parallel to it: see `plane_offset`).

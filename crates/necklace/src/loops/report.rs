@@ -3,21 +3,25 @@
 //! [`DropReason`] (one line by `Display`), and the stage's timings. Plain data,
 //! serialized as `loops.json` describes.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::{Initial, MembraneFailure, Role, Seed, SurfacePoint, TightenStatus};
 use crate::mesh::{Side, SurfaceMesh};
 
 /// A neck loop.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct NeckLoop {
     /// The side whose volume the saddle came from: inside a handle, outside a tunnel
     /// (serialized `"handle"` / `"tunnel"`).
-    #[serde(serialize_with = "Side::serialize_as_neck")]
+    #[serde(
+        serialize_with = "Side::serialize_as_neck",
+        deserialize_with = "Side::deserialize_from_neck"
+    )]
     pub kind: Side,
     /// Closed polyline on the surface (first point not repeated).
     pub points: Vec<[f64; 3]>,
-    /// The same points as surface locations (edge + parameter, or vertex).
+    /// The same points as surface locations (edge + parameter, or vertex). From
+    /// [`find_necks`](crate::pipeline::find_necks), vertex indices are the input mesh's.
     pub surface_points: Vec<SurfacePoint>,
     /// Length of the tightened loop.
     pub length: f64,
@@ -93,7 +97,7 @@ impl NeckLoop {
 }
 
 /// Diagnostics of the tightening of a kept loop.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TighteningReport {
     /// Converged or stalled.
     pub status: TightenStatus,
@@ -110,7 +114,7 @@ pub struct TighteningReport {
 }
 
 /// Why a seed gave no loop.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "reason")]
 pub enum DropReason {
     /// No closed cut curve contains the saddle's projection.
@@ -280,10 +284,13 @@ impl std::fmt::Display for DropReason {
 }
 
 /// A seed that gave no loop, and why.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DroppedLoop {
     /// Inside (handle) or outside (tunnel), serialized `"handle"` / `"tunnel"`.
-    #[serde(serialize_with = "Side::serialize_as_neck")]
+    #[serde(
+        serialize_with = "Side::serialize_as_neck",
+        deserialize_with = "Side::deserialize_from_neck"
+    )]
     pub kind: Side,
     /// Index of the seed.
     pub seed: usize,
@@ -309,7 +316,7 @@ impl DroppedLoop {
 }
 
 /// Wall-clock seconds of the loop stage.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct LoopTimings {
     /// Topology and vertex angles of the surface.
     pub preparation: f64,
@@ -320,7 +327,7 @@ pub struct LoopTimings {
 }
 
 /// Loops and dropped seeds.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LoopResult {
     /// Kept loops, by persistence (descending), then length.
     pub loops: Vec<NeckLoop>,

@@ -3,7 +3,7 @@
 use std::collections::HashSet;
 use std::fmt;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::topology::{find, union, Topology};
 use super::SurfaceMesh;
@@ -21,7 +21,7 @@ pub const MAX_COORDINATE: f64 = 1e100;
 const FLAT_RELATIVE: f64 = 1e-12;
 
 /// Counts, validity flags and genus of a surface mesh. Built by [`MeshReport::new`].
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MeshReport {
     /// Number of vertices (including unreferenced ones).
     pub vertices: usize,
@@ -97,7 +97,7 @@ pub struct MeshReport {
 }
 
 /// Counts and topology of one connected component.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ComponentReport {
     /// Vertices in the component.
     pub vertices: usize,

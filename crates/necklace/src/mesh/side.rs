@@ -5,14 +5,15 @@
 //! *handle*; one found outside goes around a narrow part of the space: a *tunnel*.
 //!
 //! Serialized as `"inside"` / `"outside"`; fields that name a loop's kind serialize it
-//! as `"handle"` / `"tunnel"` through [`Side::serialize_as_neck`].
+//! as `"handle"` / `"tunnel"` through [`Side::serialize_as_neck`] (read back by
+//! [`Side::deserialize_from_neck`]).
 
 use std::fmt;
 
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// The solid bounded by the surface, or the shell between it and a bounding sphere.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Side {
     /// The solid bounded by the surface: its necks are handles.
@@ -49,6 +50,16 @@ impl Side {
     /// For `#[serde(serialize_with = ..)]` on a loop's kind: `"handle"` or `"tunnel"`.
     pub fn serialize_as_neck<S: Serializer>(side: &Side, serializer: S) -> Result<S::Ok, S::Error> {
         serializer.serialize_str(side.neck_name())
+    }
+
+    /// For `#[serde(deserialize_with = ..)]`: the inverse of [`Side::serialize_as_neck`].
+    pub fn deserialize_from_neck<'de, D: Deserializer<'de>>(
+        deserializer: D,
+    ) -> Result<Side, D::Error> {
+        let name = String::deserialize(deserializer)?;
+        Side::from_neck_name(&name).ok_or_else(|| {
+            serde::de::Error::custom(format!("'{name}' is not a loop kind (handle or tunnel)"))
+        })
     }
 }
 

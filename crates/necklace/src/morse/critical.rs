@@ -21,13 +21,13 @@
 //! its class, since the class depends on nothing else.
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::tet::{TetMesh, VertexKind};
 
 /// The type of a vertex.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum VertexType {
     /// Not interior (surface or outer sphere): not classified.
@@ -47,7 +47,7 @@ pub enum VertexType {
 }
 
 /// The classification of one vertex.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct VertexClass {
     /// Its type.
     pub kind: VertexType,
@@ -60,7 +60,7 @@ pub struct VertexClass {
 }
 
 /// Every vertex's class, and the Morse sum over interior vertices.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Classification {
     /// One entry per mesh vertex.
     pub classes: Vec<VertexClass>,
@@ -93,7 +93,7 @@ pub fn classify(mesh: &TetMesh, f: &[f64]) -> Result<Classification> {
 /// than the surface where a tet, face or edge spans surface vertices only (a thin part
 /// with no interior vertex); then the two differ, and the mesh's value is the one the
 /// classification must meet.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct MorseExpectation {
     /// χ(K_S): the full subcomplex on the surface vertices.
     pub surface_part_euler: i64,

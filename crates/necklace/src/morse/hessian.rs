@@ -11,12 +11,12 @@
 //! length². Entry point: [`hessian_at`].
 
 use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::tet::TetMesh;
 
 /// The fitted Hessian at a vertex.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Hessian {
     /// Eigenvalues, ascending.
     pub eigenvalues: [f64; 3],

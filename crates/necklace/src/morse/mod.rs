@@ -60,7 +60,7 @@ pub mod tracking;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::geom::{add, dot, norm, scale, sub};
@@ -82,7 +82,7 @@ pub use smoothing::{implicit_step, HeatSolver, SolverOptions, StepReport};
 pub use tracking::{CriticalPoint, StepEvents, Track, Tracker};
 
 /// Which heat times to classify at.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Schedule {
     /// A geometric sequence of scales from `min_scale` to `max_scale` (default).

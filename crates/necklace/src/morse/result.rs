@@ -3,12 +3,12 @@
 //! normal, role, bulge, scales), every 2-saddle track not kept with its
 //! [`RejectReason`], the barcode ([`Bar`]), the smoothed field and timings. Plain data.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::{Hessian, MorseExpectation, SaddleRole, Schedule, StepEvents, StepReport, Track};
 
 /// One classified step (a level of the scale space).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct StepSummary {
     /// Heat steps taken (the level, counted from 1).
     pub step: usize,
@@ -48,7 +48,7 @@ pub struct StepSummary {
 }
 
 /// A selected 2-saddle.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Saddle {
     /// Its vertex at its representative step.
     pub vertex: u32,
@@ -112,7 +112,7 @@ impl Saddle {
 }
 
 /// Why a 2-saddle track was not selected.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "reason")]
 pub enum RejectReason {
     /// It survived fewer than `min_persistence` steps (`min_levels` levels).
@@ -170,7 +170,7 @@ impl std::fmt::Display for RejectReason {
 }
 
 /// A 2-saddle track that was not selected.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RejectedSaddle {
     /// Its vertex (at its last step, or its representative one).
     pub vertex: u32,
@@ -188,7 +188,7 @@ pub struct RejectedSaddle {
 }
 
 /// Wall-clock seconds of each part of [`analyze`](super::analyze).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct MorseTimings {
     /// `L`, `M`, the reduced system and the links.
     pub assembly: f64,
@@ -201,7 +201,7 @@ pub struct MorseTimings {
 }
 
 /// Everything [`analyze`](super::analyze) found.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MorseResult {
     /// The schedule run.
     pub schedule: Schedule,
@@ -239,7 +239,7 @@ pub struct MorseResult {
 }
 
 /// One 2-saddle track over scale.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Bar {
     /// Scale at which it appeared.
     pub birth_scale: f64,

@@ -41,7 +41,7 @@
 //! thread count.
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::critical::{Classification, VertexType};
 use super::cycles::Cocycles;
@@ -49,7 +49,7 @@ use crate::mesh::Z2Basis;
 use crate::tet::{TetMesh, VertexKind};
 
 /// What a 2-saddle does to the superlevel sets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SaddleRole {
     /// Joins two lobes (two components of the superlevel set).
@@ -65,7 +65,7 @@ pub enum SaddleRole {
 pub const LOCAL_HOPS: usize = 3;
 
 /// The role of one 2-saddle at one level.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RoleAt {
     /// The 2-saddle's vertex.
     pub vertex: u32,

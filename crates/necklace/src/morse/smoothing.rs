@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::laplacian::SparseMatrix;
 
@@ -38,7 +38,7 @@ impl Default for SolverOptions {
 }
 
 /// What one implicit step did.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct StepReport {
     /// CG iterations.
     pub iterations: usize,

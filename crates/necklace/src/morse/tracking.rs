@@ -13,7 +13,7 @@
 //! not depend on the thread count. Entry point: [`Tracker::advance`].
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::critical::VertexType;
 
@@ -31,7 +31,7 @@ pub struct CriticalPoint {
 }
 
 /// The life of one critical point over the smoothing steps.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Track {
     /// Its type.
     pub kind: VertexType,
@@ -61,7 +61,7 @@ impl Track {
 }
 
 /// What happened between two classified steps.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct StepEvents {
     /// New tracks (every point, at the first step).
     pub births: usize,

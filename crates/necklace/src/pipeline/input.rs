@@ -52,6 +52,9 @@ pub struct PreparedSurface {
     /// none, the pseudonormal sign ([`SurfaceDistance::of_surface`]): built once, and
     /// shared by every stage of the run.
     pub distance: SurfaceDistance,
+    /// For each vertex of `mesh`, its index in the input (the input's vertices that a
+    /// face uses, in their order; faces keep their indices and order).
+    pub input_vertex: Vec<u32>,
     /// The repairs made, one line each.
     pub notes: Vec<String>,
     /// What is still unusual about the surface, one line each.
@@ -95,6 +98,7 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
 
     // 1. Unreferenced vertices.
     let (mut mesh, removed) = remove_unreferenced(&input);
+    let input_vertex = used_vertices(&input);
     if removed > 0 {
         notes.push(format!(
             "removed {removed} vertices that no face uses (they would have set the bounding box)"
@@ -181,9 +185,24 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
         distance,
         flipped: turned.flipped_faces > 0 || flipped_components > 0,
         crossing_faces,
+        input_vertex,
         notes,
         warnings,
     })
+}
+
+/// The vertices of `mesh` that a face uses, in their order (what
+/// [`remove_unreferenced`] keeps).
+fn used_vertices(mesh: &SurfaceMesh) -> Vec<u32> {
+    let mut used = vec![false; mesh.positions.len()];
+    for t in &mesh.triangles {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    (0..mesh.positions.len() as u32)
+        .filter(|&v| used[v as usize])
+        .collect()
 }
 
 /// Check that `mesh` is a closed, manifold surface and [`prepare_input`] it. An error

@@ -17,7 +17,8 @@
 //! 5. a loop per saddle (`loops`: plane cut, tightening, selection; on the volume
 //!    mesh's boundary where a neck lies by a self-crossing);
 //! 6. the Morse and homology checks, and the side into the [`NeckReport`] (its types
-//!    live in submodule `report`; pictures and point clouds of it are `output`'s).
+//!    live in submodule `report`; pictures and point clouds of it are `output`'s);
+//! 7. the loops' surface points renumbered to the input's vertices.
 //!
 //! Stage timings are laps of one clock, so they add up to the side's time.
 //! [`find_critical_points`] (submodule `critical`) is steps 1–4 for one side, what
@@ -166,6 +167,8 @@ pub fn find_necks_with_progress(
         }
     }
     report.timings.seconds = report.timings.input + report.timings.total.total;
+    // 7. Loops located on the input's vertices (preparing may have dropped unused ones).
+    report.index_by_input(&prepared.input_vertex);
     Ok(report)
 }
 

@@ -3,10 +3,10 @@
 //! notes on the input and the warnings, and stage timings. Plain data, built by
 //! [`find_necks`](super::find_necks) and `necklace critical`; `output` writes it.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::PreparedSurface;
-use crate::loops::{DropReason, DroppedLoop, NeckLoop};
+use crate::loops::{DropReason, DroppedLoop, NeckLoop, SurfacePoint};
 use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::{self, MorseResult, VertexType};
 use crate::tet::TetMesh;
@@ -14,7 +14,7 @@ use crate::volume::VolumeReport;
 
 /// A critical point alive at the last level of a run, as the report keeps it (the
 /// picture and `critical.ply` are drawn from these by `output`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TrackedPoint {
     /// Where it is at the last level.
     pub position: [f64; 3],
@@ -43,7 +43,7 @@ pub fn tracked_points(result: &MorseResult) -> Vec<TrackedPoint> {
 }
 
 /// Wall-clock seconds per stage of one side.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct StageTimings {
     /// Volume mesh.
     pub volume_mesh: f64,
@@ -71,7 +71,7 @@ impl StageTimings {
 }
 
 /// The Morse check of one side: every classified step, and whether all held.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MorseCheck {
     /// Which side.
     pub side: Side,
@@ -94,7 +94,7 @@ pub struct MorseCheck {
 }
 
 /// One side's intermediate results.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SideReport {
     /// Which side.
     pub side: Side,
@@ -124,7 +124,7 @@ pub struct SideReport {
 }
 
 /// The rank of one side's loop classes against the genus.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct HomologyCheck {
     /// Total genus of the surface (`None` when a component's is undefined).
     pub genus: Option<i64>,
@@ -144,7 +144,7 @@ pub struct VolumeField {
 }
 
 /// What [`find_necks`](super::find_necks) found.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct NeckReport {
     /// Handle loops, then tunnel loops, each by persistence then length.
     pub loops: Vec<NeckLoop>,
@@ -172,7 +172,7 @@ pub struct NeckReport {
 }
 
 /// Stage timings per side and in total.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct NeckTimings {
     /// The input step: checks, repairs, and the surface's distance structure.
     pub input: f64,
@@ -208,6 +208,20 @@ impl NeckReport {
             notes: prepared.notes.clone(),
             surface: prepared.mesh.clone(),
             warnings: prepared.warnings.clone(),
+        }
+    }
+
+    /// Renumber the loops' surface points from the prepared surface's vertices to the
+    /// input's (`input_vertex[v]` for prepared vertex `v`).
+    pub(super) fn index_by_input(&mut self, input_vertex: &[u32]) {
+        let map = |v: u32| input_vertex.get(v as usize).copied().unwrap_or(v);
+        for l in &mut self.loops {
+            for p in &mut l.surface_points {
+                match p {
+                    SurfacePoint::Edge { edge, .. } => *edge = edge.map(map),
+                    SurfacePoint::Vertex { vertex } => *vertex = map(*vertex),
+                }
+            }
         }
     }
 

@@ -488,7 +488,10 @@ pub struct ExpectedNeck {
     /// Inside (a handle: around a narrow part of the solid) or outside (a tunnel:
     /// around a narrow part of the space around it, e.g. a hole); serialized
     /// `"handle"` / `"tunnel"`.
-    #[serde(serialize_with = "Side::serialize_as_neck")]
+    #[serde(
+        serialize_with = "Side::serialize_as_neck",
+        deserialize_with = "Side::deserialize_from_neck"
+    )]
     pub kind: Side,
     /// Length of the tightest loop, when known in closed form.
     pub length: Option<f64>,

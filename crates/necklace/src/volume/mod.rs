@@ -64,7 +64,7 @@ pub mod tetgen;
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::tet::{renumber_used, TetMesh, VertexKind};
@@ -109,7 +109,7 @@ impl StuffingOptions {
 }
 
 /// Counts that describe a stuffing run.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct StuffingStats {
     /// Spacing along the boundary.
     pub h: f64,

@@ -15,7 +15,7 @@
 //! Entry point: [`improve`]. Angles in degrees.
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::geom::{add, cross, dot, norm, plane_basis, scale, sub};
 use crate::mesh::Csr;
@@ -33,7 +33,7 @@ pub(crate) enum Mobility {
 }
 
 /// What the quality step did.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct QualityStats {
     /// The target smallest dihedral angle, degrees (0: the step was off).
     pub target_deg: f64,

@@ -30,7 +30,7 @@
 
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::prediction::predict;
 use super::surface_sizing::{
@@ -47,7 +47,7 @@ use crate::mesh::{Side, SurfaceMesh, Topology};
 use crate::tet::{TetMesh, TetTopology, VertexKind};
 
 /// Which volume mesher to use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Mesher {
     /// necklace's isosurface stuffing (default).
@@ -132,7 +132,7 @@ pub struct VolumeResult {
 }
 
 /// The volume mesh's topology against the surface's prediction.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct TopologyCheck {
     /// What the surface predicts (`None` when it cannot: a component whose genus is
     /// undefined, or components that cross each other).
@@ -152,7 +152,7 @@ pub fn default_h(surface: &SurfaceMesh) -> f64 {
 }
 
 /// The summary of a volume mesh that `necklace volume --json` prints.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct VolumeReport {
     /// Which side was meshed.
     pub side: Side,

@@ -29,6 +29,7 @@ const CRATES: &[(&str, Option<&[&str]>)] = &[
     ("kiddo", Some(&["morse"])),
     ("nalgebra", Some(&["morse", "loops"])),
     ("png", Some(&["render"])),
+    ("flate2", Some(&["io::vtk"])),
     ("serde_json", Some(&["output"])),
     ("rustc_hash", Some(&["volume"])),
     ("indicatif", Some(&[])),

@@ -1118,3 +1118,33 @@ fn the_opening_is_how_much_longer_the_parallel_curve_one_radius_away_is() {
     assert!((o[0] - (1f64.cos() - 1.0)).abs() < 0.02, "{o:?}");
     assert!(o[1].abs() < 0.01, "{o:?}");
 }
+
+#[test]
+fn surface_points_index_the_input_even_when_unused_vertices_are_dropped() {
+    // A torus whose vertex list starts with three vertices no face uses (far away, so
+    // they are not merely ignored): preparing drops them, the loops' surface points
+    // must still name the input's vertices.
+    let mut input = Shape::new(ShapeKind::Torus).mesh().unwrap();
+    input.positions.splice(0..0, [[50.0, 0.0, 0.0]; 3]);
+    for t in &mut input.triangles {
+        *t = t.map(|v| v + 3);
+    }
+    let report = find_necks(&input, &NeckOptions::default()).unwrap();
+    assert!(!report.loops.is_empty());
+    for l in &report.loops {
+        for (p, at) in l.points.iter().zip(&l.surface_points) {
+            let q = match *at {
+                SurfacePoint::Vertex { vertex } => input.positions[vertex as usize],
+                SurfacePoint::Edge { edge, t } => {
+                    let (a, b) = (
+                        input.positions[edge[0] as usize],
+                        input.positions[edge[1] as usize],
+                    );
+                    [0, 1, 2].map(|k| (1.0 - t) * a[k] + t * b[k])
+                }
+            };
+            let gap = (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max);
+            assert!(gap < 1e-9, "{p:?} vs {q:?}");
+        }
+    }
+}

@@ -256,6 +256,19 @@ fn a_run_writes_every_file_with_the_documented_fields() {
     ] {
         assert!(json.get(key).is_some(), "{key}");
     }
+    // ... and into the report itself: every field the JSON has comes back.
+    let back = output::read_report_json(dir.join("loops.json")).unwrap();
+    assert_eq!(
+        serde_json::to_value(&back).unwrap(),
+        serde_json::to_value(&report).unwrap()
+    );
+    assert_eq!(back.loops.len(), report.loops.len());
+    for (a, b) in back.loops.iter().zip(&report.loops) {
+        assert_eq!(
+            (a.kind, &a.points, &a.surface_points),
+            (b.kind, &b.points, &b.surface_points)
+        );
+    }
     let curves = output::read_loops_json(dir.join("loops.json")).unwrap();
     assert_eq!(curves, output::loop_curves(&report));
     let saddles = output::read_points_json(dir.join("loops.json")).unwrap();
@@ -276,7 +289,24 @@ fn a_run_writes_every_file_with_the_documented_fields() {
         header.contains(&format!("element edge {points}")),
         "{header}"
     );
+    // The loop index rides on the vertices; edges are bare pairs (trimesh refuses
+    // edges with more properties).
     assert!(header.contains("property int loop"));
+    assert!(
+        header.ends_with("property int vertex1\nproperty int vertex2\n"),
+        "{header}"
+    );
+
+    // loops.vtp and loops.vtu: a polyline per loop, a line cell per segment.
+    let vtp = std::fs::read(dir.join("loops.vtp")).unwrap();
+    let vtp = String::from_utf8_lossy(&vtp);
+    assert!(
+        vtp.contains(&format!("NumberOfLines=\"{}\"", report.loops.len())),
+        "{vtp}"
+    );
+    let vtu = std::fs::read(dir.join("loops.vtu")).unwrap();
+    let vtu = String::from_utf8_lossy(&vtu);
+    assert!(vtu.contains(&format!("NumberOfCells=\"{points}\"")));
 
     // critical.ply: every alive critical point of both sides, with a side field.
     let cloud_points: usize = report.sides.iter().map(|s| s.critical.len()).sum();
@@ -292,8 +322,16 @@ fn a_run_writes_every_file_with_the_documented_fields() {
     let vertices: usize = report.sides.iter().map(|s| s.volume.vertices).sum();
     let tets: usize = report.sides.iter().map(|s| s.volume.tets).sum();
     assert_eq!((volume.num_vertices(), volume.tets.len()), (vertices, tets));
-    let text = std::fs::read_to_string(dir.join("field.vtu")).unwrap_or_default();
-    assert!(text.is_empty() || text.contains("field"));
+    let bytes = std::fs::read(dir.join("field.vtu")).unwrap();
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(2000)]).to_string();
+    assert!(head.contains("Name=\"field\""), "{head}");
+    assert!(head.contains("<AppendedData encoding=\"raw\">"), "{head}");
+    // Compressed binary: far below the 8 bytes of each coordinate and index.
+    assert!(
+        bytes.len() < 8 * (3 * vertices + 4 * tets) / 2,
+        "{}",
+        bytes.len()
+    );
 
     // Without the kept volume, field.vtu is refused with a reason.
     let plain = find_necks(

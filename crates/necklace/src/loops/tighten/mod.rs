@@ -31,7 +31,7 @@ mod path;
 mod strip;
 mod unfold;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::cut::{closed_length, Crossing};
 use crate::geom::{dot, lerp, norm, sub};
@@ -52,7 +52,7 @@ const MAX_STRIP_GROWTH: usize = 20;
 const STRIP_GROWTH_SLACK: usize = 1000;
 
 /// Options of [`tighten`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TightenOptions {
     /// Most strip-update rounds. Default 2000.
     pub max_rounds: usize,
@@ -76,7 +76,7 @@ impl Default for TightenOptions {
 }
 
 /// A point of the surface the loop passes through.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SurfacePoint {
     /// On edge `[a, b]` at `(1 − t)·a + t·b`, `0 < t < 1`.
@@ -94,7 +94,7 @@ pub enum SurfacePoint {
 }
 
 /// How tightening ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TightenStatus {
     /// A closed geodesic: no vertex needs an update.
@@ -111,7 +111,7 @@ pub enum TightenStatus {
 }
 
 /// A tightened loop with its diagnostics.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Tightened {
     /// Surface points in order, cyclic, first not repeated.
     pub surface_points: Vec<SurfacePoint>,
