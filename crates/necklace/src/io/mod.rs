@@ -32,6 +32,7 @@ mod tetgen;
 mod text;
 mod vtk;
 mod vtu;
+mod xml;
 
 use std::path::Path;
 

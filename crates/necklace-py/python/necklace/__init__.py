@@ -1,0 +1,460 @@
+"""Neck loops (handles and tunnels) of closed triangle meshes.
+
+necklace finds the loops that lasso the narrow parts of a solid (*handles*: a finger,
+a tail, the thin side of a ring) and of the space around it (*tunnels*: around a
+hole), after "Fast Computation of Neck-like Features". numpy in, numpy out::
+
+    import necklace, trimesh
+    mesh = trimesh.load("kitten.off")
+    result = necklace.find_necks(mesh.vertices, mesh.faces)
+    for loop in result.loops:
+        print(loop.kind, loop.length, loop.points.shape)
+
+Units are the input's; positions are in the input's frame. Errors raise
+:class:`NecklaceError` (a ``ValueError``) with a one-line message.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+import numpy as np
+
+from ._necklace import JSON_VERSION, NecklaceError, __version__
+from ._necklace import find_necks as _find_necks
+from ._necklace import load_mesh as _load_mesh
+
+__all__ = [
+    "find_necks",
+    "load_mesh",
+    "NecklaceError",
+    "NeckResult",
+    "Loop",
+    "DroppedSaddle",
+    "CriticalPoints",
+    "VolumeField",
+    "JSON_VERSION",
+    "__version__",
+]
+
+_MAX_INDEX = 2**32 - 1
+
+
+@dataclass(frozen=True)
+class Loop:
+    """A neck loop: a closed polyline on the surface.
+
+    Attributes:
+        kind: ``"handle"`` (around a narrow part of the solid) or ``"tunnel"``
+            (around a narrow part of the space around it).
+        points: ``(k, 3)`` float64, the closed polyline (first point not repeated),
+            in input units.
+        edges: ``(k, 2)`` int64, where each point lies on the surface: on the input
+            edge ``edges[i]`` at ``(1 - t[i]) * V[edges[i, 0]] + t[i] * V[edges[i, 1]]``;
+            a point at a vertex ``v`` has ``edges[i] == (v, v)`` and ``t[i] == 0``.
+            Indices are the input's vertex indices.
+        t: ``(k,)`` float64, the parameter along ``edges``.
+        length: length of the loop (input units).
+        radius: ``length / 2π``.
+        center: ``(3,)`` length-weighted centroid.
+        normal: ``(3,)`` unit normal of the best-fit plane (the loop turns
+            counter-clockwise around it).
+        saddle: ``(3,)`` the 2-saddle it came from.
+        persistence: smoothing levels the saddle lived.
+        role: ``"cycle_closing"``, ``"separating"`` or ``None``.
+        birth_scale, death_scale: the scale (a length) at which its saddle appeared
+            and vanished under smoothing (``death_scale`` ``None``: alive at the
+            largest scale).
+        homology: its Z2 homology class, one ``"0"``/``"1"`` per basis cycle.
+        separating: whether it cuts the surface in two (class 0).
+        initial: how the initial loop was built (``"plane"`` or ``"membrane"``).
+        data: every field of the loop as ``loops.json`` has it (``bulge``,
+            ``areas``, ``opening``, ``flatness``, ``reason``, ``tightening``, ...).
+    """
+
+    kind: str
+    points: np.ndarray
+    edges: np.ndarray
+    t: np.ndarray
+    length: float
+    radius: float
+    center: np.ndarray
+    normal: np.ndarray
+    saddle: np.ndarray
+    persistence: int
+    role: Optional[str]
+    birth_scale: float
+    death_scale: Optional[float]
+    homology: str
+    separating: bool
+    initial: str
+    data: Dict[str, Any] = field(repr=False)
+
+    def __repr__(self) -> str:
+        return (
+            f"Loop({self.kind}, length={self.length:.6g}, points={len(self.points)}, "
+            f"persistence={self.persistence}, role={self.role})"
+        )
+
+
+@dataclass(frozen=True)
+class DroppedSaddle:
+    """A selected 2-saddle that gave no kept loop, and why.
+
+    Attributes:
+        kind: ``"handle"`` or ``"tunnel"``.
+        saddle: ``(3,)`` its position.
+        persistence: smoothing levels it lived.
+        reason: the reason's name (``"duplicate"``, ``"not_a_neck"``, ...).
+        data: every field as ``loops.json`` has it (the reason's figures).
+    """
+
+    kind: str
+    saddle: np.ndarray
+    persistence: int
+    reason: str
+    data: Dict[str, Any] = field(repr=False)
+
+
+@dataclass(frozen=True)
+class CriticalPoints:
+    """The critical points of one side's smoothed distance at the last level.
+
+    Attributes:
+        side: ``"inside"`` (handles) or ``"outside"`` (tunnels).
+        position: ``(n, 3)`` float64.
+        type: ``(n,)`` str: ``"minimum"``, ``"saddle1"``, ``"saddle2"``,
+            ``"maximum"``, ``"degenerate"``.
+        selected: ``(n,)`` bool, the neck 2-saddles.
+        persistence: ``(n,)`` uint64, levels lived.
+    """
+
+    side: str
+    position: np.ndarray
+    type: np.ndarray
+    selected: np.ndarray
+    persistence: np.ndarray
+
+
+@dataclass(frozen=True)
+class VolumeField:
+    """One side's tet mesh and smoothed distance field (``find_necks(volume=True)``).
+
+    Attributes:
+        side: ``"inside"`` or ``"outside"``.
+        points: ``(n, 3)`` float64 vertex positions.
+        tets: ``(t, 4)`` int64 vertex indices, positively oriented.
+        field: ``(n,)`` float64, the distance to the surface after the last smoothing
+            step: 0 on the surface; outside in input units, inside rescaled after
+            each step to a maximum of 1 (its boundary values are all 0, so heat would
+            otherwise drain it).
+        kind: ``(n,)`` str: ``"interior"``, ``"surface"`` or ``"outer"`` (the
+            bounding sphere of the outside shell).
+    """
+
+    side: str
+    points: np.ndarray
+    tets: np.ndarray
+    field: np.ndarray
+    kind: np.ndarray
+
+
+@dataclass(frozen=True, repr=False)
+class NeckResult:
+    """What :func:`find_necks` found.
+
+    Attributes:
+        loops: the neck loops, handles then tunnels.
+        dropped: the saddles that gave no loop, with reasons.
+        critical: per side run, the critical points at the last level.
+        volume: per side run, the tet mesh and field (only with ``volume=True``).
+        morse: per side, the Morse check (``ok``, per-level counts), as in the JSON.
+        saddles: per side, the selected 2-saddles (dicts, as in the JSON).
+        rejected: per side, the 2-saddles not selected, with reasons.
+        warnings: what is unusual about the input or the run, one line each.
+        notes: what was repaired in the input, one line each.
+        timings: seconds per stage and side.
+    """
+
+    loops: List[Loop]
+    dropped: List[DroppedSaddle]
+    critical: List[CriticalPoints]
+    volume: List[VolumeField]
+    morse: List[Dict[str, Any]]
+    saddles: Dict[str, List[Dict[str, Any]]]
+    rejected: Dict[str, List[Dict[str, Any]]]
+    warnings: List[str]
+    notes: List[str]
+    timings: Dict[str, Any]
+    _report: Dict[str, Any] = field(repr=False)
+
+    @property
+    def handles(self) -> List[Loop]:
+        """The handle loops."""
+        return [l for l in self.loops if l.kind == "handle"]
+
+    @property
+    def tunnels(self) -> List[Loop]:
+        """The tunnel loops."""
+        return [l for l in self.loops if l.kind == "tunnel"]
+
+    @property
+    def morse_ok(self) -> bool:
+        """Whether every side's Morse sum matched at every level."""
+        return all(m["ok"] for m in self.morse)
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The report as ``loops.json`` holds it (``json.dump`` writes the same file)."""
+        return json.loads(json.dumps(self._report))
+
+    def __repr__(self) -> str:
+        lines = [
+            f"NeckResult: {len(self.handles)} handles, {len(self.tunnels)} tunnels, "
+            f"{len(self.dropped)} dropped"
+        ]
+        for i, l in enumerate(self.loops):
+            c = ", ".join(f"{x:.4g}" for x in l.center)
+            lines.append(
+                f"  {i:2} {l.kind:6} length {l.length:.6g} radius {l.radius:.4g} "
+                f"centre ({c}) persistence {l.persistence}"
+            )
+        for d in self.dropped:
+            lines.append(f"  dropped {d.kind} saddle (persistence {d.persistence}): {d.reason}")
+        for w in self.warnings:
+            lines.append(f"  warning: {w}")
+        return "\n".join(lines)
+
+
+def _as_vertices(vertices: Any) -> np.ndarray:
+    try:
+        v = np.asarray(vertices)
+    except Exception as e:  # e.g. ragged lists
+        raise NecklaceError(f"vertices: not an array ({e})") from None
+    if v.dtype.kind not in "fiu":
+        raise NecklaceError(f"vertices: dtype {v.dtype} is not a real number type")
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise NecklaceError(f"vertices: shape {v.shape}, expected (n, 3)")
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    bad = ~np.isfinite(v)
+    if bad.any():
+        row = int(np.argwhere(bad)[0][0])
+        raise NecklaceError(f"vertices: vertex {row} is not finite ({v[row].tolist()})")
+    return v
+
+
+def _as_faces(faces: Any, vertex_count: int) -> np.ndarray:
+    try:
+        f = np.asarray(faces)
+    except Exception as e:
+        raise NecklaceError(f"faces: not an array ({e})") from None
+    if f.dtype.kind not in "iu":
+        raise NecklaceError(f"faces: dtype {f.dtype} is not an integer type")
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise NecklaceError(f"faces: shape {f.shape}, expected (m, 3) triangles")
+    if f.size:
+        low, high = int(f.min()), int(f.max())
+        if low < 0 or high >= vertex_count:
+            bad = low if low < 0 else high
+            raise NecklaceError(
+                f"faces: vertex index {bad} out of range ({vertex_count} vertices)"
+            )
+        if high > _MAX_INDEX:
+            raise NecklaceError(f"faces: vertex index {high} above 2^32 - 1")
+    return np.ascontiguousarray(f, dtype=np.uint32)
+
+
+def _vec(x: Any) -> np.ndarray:
+    return np.asarray(x, dtype=np.float64)
+
+
+def _location(points: List[Dict[str, Any]]) -> Tuple[np.ndarray, np.ndarray]:
+    edges = np.empty((len(points), 2), dtype=np.int64)
+    t = np.zeros(len(points), dtype=np.float64)
+    for i, p in enumerate(points):
+        if "edge" in p:
+            edges[i] = p["edge"]["edge"]
+            t[i] = p["edge"]["t"]
+        else:
+            edges[i] = p["vertex"]["vertex"]
+    return edges, t
+
+
+def _loop(d: Dict[str, Any]) -> Loop:
+    edges, t = _location(d["surface_points"])
+    return Loop(
+        kind=d["kind"],
+        points=_vec(d["points"]).reshape(-1, 3),
+        edges=edges,
+        t=t,
+        length=d["length"],
+        radius=d["radius"],
+        center=_vec(d["center"]),
+        normal=_vec(d["normal"]),
+        saddle=_vec(d["saddle"]),
+        persistence=d["persistence"],
+        role=d["role"],
+        birth_scale=d["birth_scale"],
+        death_scale=d["death_scale"],
+        homology=d["homology"],
+        separating=d["separating"],
+        initial=d["initial"],
+        data=d,
+    )
+
+
+def _result(report: Dict[str, Any], sides: List[Dict[str, Any]]) -> NeckResult:
+    critical = [
+        CriticalPoints(
+            side=s["side"],
+            position=s["critical"]["position"],
+            type=np.asarray(s["critical"]["type"], dtype=str),
+            selected=s["critical"]["selected"],
+            persistence=s["critical"]["persistence"],
+        )
+        for s in sides
+    ]
+    volume = [
+        VolumeField(
+            side=s["side"],
+            points=s["volume"]["points"],
+            tets=s["volume"]["tets"],
+            field=s["volume"]["field"],
+            kind=np.asarray(s["volume"]["kind"], dtype=str),
+        )
+        for s in sides
+        if "volume" in s
+    ]
+    dropped = [
+        DroppedSaddle(
+            kind=d["kind"],
+            saddle=_vec(d["saddle"]),
+            persistence=d["persistence"],
+            reason=d["reason"],
+            data=d,
+        )
+        for d in report["dropped"]
+    ]
+    return NeckResult(
+        loops=[_loop(l) for l in report["loops"]],
+        dropped=dropped,
+        critical=critical,
+        volume=volume,
+        morse=report["morse"],
+        saddles={s["side"]: s["saddles"] for s in report["sides"]},
+        rejected={s["side"]: s["rejected"] for s in report["sides"]},
+        warnings=report["warnings"],
+        notes=report["notes"],
+        timings=report["timings"],
+        _report=report,
+    )
+
+
+def find_necks(
+    vertices: Any,
+    faces: Any,
+    *,
+    handles: bool = True,
+    tunnels: bool = True,
+    schedule: str = "scales",
+    levels: int = 32,
+    min_bulge: float = 1.5,
+    min_levels: int = 3,
+    steps: int = 20,
+    tau: float = 0.01,
+    h: Optional[float] = None,
+    max_tets: int = 20_000_000,
+    max_steps: int = 1000,
+    plane_offsets: int = 16,
+    slide_steps: int = 8,
+    min_opening: float = 0.1,
+    max_flatness: float = 3.0,
+    volume: bool = False,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+) -> NeckResult:
+    """Find the neck loops of a closed triangle mesh.
+
+    Args:
+        vertices: ``(n, 3)`` real numbers (any float or integer dtype), input units.
+        faces: ``(m, 3)`` integer vertex indices (any integer dtype, any memory
+            layout), each triangle counter-clockwise seen from outside (inverted
+            meshes and components are turned round, and said so in ``notes``).
+        handles: look for handle loops (inside the solid).
+        tunnels: look for tunnel loops (outside it).
+        schedule: ``"scales"`` (32 levels over a geometric range of scales) or
+            ``"paper"`` (the paper's ``steps`` steps of ``tau``).
+        levels: scale space: classified levels.
+        min_bulge: scale space: smallest ratio of a lobe's inscribed radius to the
+            neck's for a separating saddle to be a neck by its lobe alone.
+        min_levels: scale space: levels a saddle must live to be a neck.
+        steps: paper schedule: last smoothing step.
+        tau: paper schedule: heat time step, in units where the bounding box's
+            longest side is 1.
+        h: lattice spacing of the volume mesh, input units (default: the bounding
+            box diagonal / 64).
+        max_tets: the most tets a volume mesh may have (a larger run is refused).
+        max_steps: the most heat steps a run may take.
+        plane_offsets: parallel planes tried each way where the plane through a
+            saddle has no curve around it (0.125 % of the diagonal apart).
+        slide_steps: parallel planes (0.5 % of the diagonal apart) each way a
+            cycle-closing loop is slid along to its narrowest place.
+        min_opening: how much longer than the loop the curve one loop radius away
+            must be, on both sides, for a gently bulging separating saddle to be a neck.
+        max_flatness: the longest loop, in circumferences of the inscribed ball at its
+            saddle, such a saddle may have.
+        volume: also return each side's tet mesh and smoothed field
+            (:attr:`NeckResult.volume`).
+        progress: called as ``progress(stage, done, total)`` at each stage's start
+            and end and at most every 0.2 s in between (``total`` 0 when unknown). An
+            exception it raises is raised when the run ends.
+
+    Returns:
+        A :class:`NeckResult`.
+
+    Raises:
+        NecklaceError: arrays of the wrong shape or dtype, NaN or infinite
+            coordinates, indices out of range, a mesh no stage can use, options out of
+            range, a run over budget. The message is one line.
+
+    The defaults are those of ``necklace loops``; the GIL is released while it runs.
+    """
+    v = _as_vertices(vertices)
+    f = _as_faces(faces, len(v))
+    options = dict(
+        handles=handles,
+        tunnels=tunnels,
+        schedule=schedule,
+        levels=levels,
+        min_bulge=min_bulge,
+        min_levels=min_levels,
+        steps=steps,
+        tau=tau,
+        h=h,
+        max_tets=max_tets,
+        max_steps=max_steps,
+        plane_offsets=plane_offsets,
+        slide_steps=slide_steps,
+        min_opening=min_opening,
+        max_flatness=max_flatness,
+        volume=volume,
+    )
+    if progress is not None and not callable(progress):
+        raise NecklaceError("progress: not callable")
+    text, sides = _find_necks(v, f, options, progress)
+    return _result(json.loads(text), sides)
+
+
+def load_mesh(path: "str | os.PathLike[str]") -> Tuple[np.ndarray, np.ndarray]:
+    """Read a triangle mesh (OBJ, OFF, PLY ascii or binary, STL ascii or binary).
+
+    Returns:
+        ``(V, F)``: ``(n, 3)`` float64 vertices and ``(m, 3)`` int64 faces (polygons
+        fanned into triangles; STL corners merged).
+
+    Raises:
+        NecklaceError: an unreadable or malformed file (the message names the file
+            and the line or byte).
+    """
+    return _load_mesh(os.fspath(path))

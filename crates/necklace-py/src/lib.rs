@@ -1,0 +1,380 @@
+//! `necklace._necklace`: the Python extension module, conversion code only.
+//!
+//! numpy arrays in, the library's [`necklace::pipeline::find_necks_with_progress`] run
+//! with the GIL released, and out: the report as its JSON text (what `loops.json`
+//! holds, parsed by the Python package into its result classes), plus what the JSON
+//! leaves out as numpy arrays (each side's critical points, and with `volume=True`
+//! its tet mesh and smoothed field). Errors are `NecklaceError` (a `ValueError`) with
+//! the library's one-line message; a panic becomes a `NecklaceError` too, never a crash.
+//! The user-facing API, its documentation and its checks of array shapes and dtypes
+//! live in `python/necklace/__init__.py`; this module trusts them and checks only what
+//! it must to stay safe.
+//!
+//! Units: the input's; positions in its frame. Entry points: `find_necks`, `load_mesh`.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use necklace::loops::LoopOptions;
+use necklace::morse::{MorseOptions, Schedule};
+use necklace::pipeline::{NeckOptions, NeckReport, TrackedPoint};
+use necklace::progress::Progress;
+use necklace::volume::VolumeOptions;
+use necklace::SurfaceMesh;
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+create_exception!(
+    _necklace,
+    NecklaceError,
+    PyValueError,
+    "An input necklace cannot use, or a run that failed: the message says why, in one line."
+);
+
+/// A library error as a `NecklaceError` with its one-line message.
+fn error(e: impl std::fmt::Display) -> PyErr {
+    NecklaceError::new_err(e.to_string())
+}
+
+/// Run `work`, turning a panic into a `NecklaceError` (the interpreter keeps running).
+fn guarded<T>(work: impl FnOnce() -> necklace::Result<T>) -> PyResult<T> {
+    match catch_unwind(AssertUnwindSafe(work)) {
+        Ok(result) => result.map_err(error),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| panic.downcast_ref::<&str>().copied())
+                .unwrap_or("unknown");
+            Err(NecklaceError::new_err(format!(
+                "internal error (please report it): {what}"
+            )))
+        }
+    }
+}
+
+/// The value of option `key` in `options`, or `default`; a wrong type is a
+/// `NecklaceError` naming the option.
+fn option<'py, T: FromPyObjectOwned<'py>>(
+    options: &Bound<'py, PyDict>,
+    key: &str,
+    default: T,
+) -> PyResult<T> {
+    match options.get_item(key)? {
+        None => Ok(default),
+        Some(value) if value.is_none() => Ok(default),
+        Some(value) => value.extract::<T>().map_err(|e| {
+            let e: PyErr = e.into();
+            NecklaceError::new_err(format!(
+                "option {key} = {}: {}",
+                value.repr().map(|r| r.to_string()).unwrap_or_default(),
+                e.value(options.py())
+            ))
+        }),
+    }
+}
+
+/// The library's options from the keyword arguments (names as the CLI's flags).
+fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
+    let loops = LoopOptions::default();
+    let morse = MorseOptions::default();
+    let volume = VolumeOptions::default();
+    let schedule = match option::<String>(options, "schedule", "scales".into())?.as_str() {
+        "scales" => Schedule::ScaleSpace,
+        "paper" => Schedule::Paper,
+        other => {
+            return Err(NecklaceError::new_err(format!(
+                "option schedule = '{other}': expected 'scales' or 'paper'"
+            )))
+        }
+    };
+    let h = match options.get_item("h")? {
+        Some(value) if !value.is_none() => Some(option::<f64>(options, "h", 0.0)?),
+        _ => None,
+    };
+    Ok(NeckOptions {
+        handles: option(options, "handles", true)?,
+        tunnels: option(options, "tunnels", true)?,
+        volume: VolumeOptions {
+            h,
+            max_tets: option(options, "max_tets", volume.max_tets)?,
+            ..volume
+        },
+        morse: MorseOptions {
+            schedule,
+            levels: option(options, "levels", morse.levels)?,
+            min_bulge: option(options, "min_bulge", morse.min_bulge)?,
+            min_levels: option(options, "min_levels", morse.min_levels)?,
+            steps: option(options, "steps", morse.steps)?,
+            tau: option(options, "tau", morse.tau)?,
+            max_steps: option(options, "max_steps", morse.max_steps)?,
+            ..morse
+        },
+        loops: LoopOptions {
+            plane_offsets: option(options, "plane_offsets", loops.plane_offsets)?,
+            slide_steps: option(options, "slide_steps", loops.slide_steps)?,
+            min_opening: option(options, "min_opening", loops.min_opening)?,
+            max_flatness: option(options, "max_flatness", loops.max_flatness)?,
+            ..loops
+        },
+        keep_volume: option(options, "volume", false)?,
+    })
+}
+
+/// Progress reports to a Python callable `progress(stage, done, total)`: at each
+/// stage's start and end, and in between at most every 0.2 s. The first exception it
+/// raises stops further calls and is raised when the run ends.
+struct PyProgress {
+    callback: Py<PyAny>,
+    state: Mutex<ProgressState>,
+}
+
+struct ProgressState {
+    stage: String,
+    done: u64,
+    total: u64,
+    last_call: Instant,
+    error: Option<PyErr>,
+}
+
+impl PyProgress {
+    fn call(&self, state: &mut ProgressState) {
+        if state.error.is_some() {
+            return;
+        }
+        state.last_call = Instant::now();
+        let result = Python::attach(|py| {
+            self.callback
+                .call1(py, (state.stage.as_str(), state.done, state.total))
+                .map(drop)
+        });
+        if let Err(e) = result {
+            state.error = Some(e);
+        }
+    }
+}
+
+impl Progress for PyProgress {
+    fn start(&self, stage: &str, total: u64) {
+        if let Ok(mut state) = self.state.lock() {
+            state.stage = stage.to_string();
+            (state.done, state.total) = (0, total);
+            self.call(&mut state);
+        }
+    }
+
+    fn advance(&self, units: u64) {
+        if let Ok(mut state) = self.state.lock() {
+            state.done += units;
+            if state.last_call.elapsed() >= Duration::from_millis(200) {
+                self.call(&mut state);
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Ok(mut state) = self.state.lock() {
+            state.done = state.done.max(state.total);
+            self.call(&mut state);
+        }
+    }
+}
+
+/// A flat `Vec` as a numpy array of shape `(len / columns, columns)`.
+fn matrix<'py, T: numpy::Element>(
+    py: Python<'py>,
+    values: Vec<T>,
+    columns: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let rows = values.len() / columns;
+    Ok(PyArray1::from_vec(py, values)
+        .reshape([rows, columns])?
+        .into_any())
+}
+
+/// The serde name of a value (`"saddle2"`, `"surface"`, ...).
+fn name<T: serde::Serialize>(value: T) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(s)) => s,
+        _ => String::new(),
+    }
+}
+
+/// One side's critical points as arrays: `position (n, 3)`, `type` (a list of names as
+/// the JSON spells them: `minimum`, `saddle1`, `saddle2`, `maximum`, ...),
+/// `selected (n,)`, `persistence (n,)`.
+fn critical_arrays<'py>(py: Python<'py>, points: &[TrackedPoint]) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    let positions: Vec<f64> = points.iter().flat_map(|p| p.position).collect();
+    out.set_item("position", matrix(py, positions, 3)?)?;
+    let types: Vec<String> = points.iter().map(|p| name(p.kind)).collect();
+    out.set_item("type", types)?;
+    let selected: Vec<bool> = points.iter().map(|p| p.selected).collect();
+    out.set_item("selected", PyArray1::from_vec(py, selected))?;
+    let persistence: Vec<u64> = points.iter().map(|p| p.persistence as u64).collect();
+    out.set_item("persistence", PyArray1::from_vec(py, persistence))?;
+    Ok(out)
+}
+
+/// What the JSON leaves out, per side: `side`, `critical` (see [`critical_arrays`]) and,
+/// when the volume was kept, `volume`: `points (n, 3)`, `tets (t, 4)`, `field (n,)`,
+/// `kind` (a list of names: `interior`, `surface`, `outer`).
+fn side_arrays<'py>(py: Python<'py>, report: &NeckReport) -> PyResult<Bound<'py, PyList>> {
+    let sides = PyList::empty(py);
+    for side in &report.sides {
+        let entry = PyDict::new(py);
+        entry.set_item("side", side.side.name())?;
+        entry.set_item("critical", critical_arrays(py, &side.critical)?)?;
+        if let Some(field) = &side.field {
+            let volume = PyDict::new(py);
+            let points: Vec<f64> = field.mesh.positions.iter().flatten().copied().collect();
+            volume.set_item("points", matrix(py, points, 3)?)?;
+            let tets: Vec<i64> = field
+                .mesh
+                .tets
+                .iter()
+                .flatten()
+                .map(|&v| v as i64)
+                .collect();
+            volume.set_item("tets", matrix(py, tets, 4)?)?;
+            volume.set_item("field", PyArray1::from_vec(py, field.values.clone()))?;
+            let kinds: Vec<String> = field.mesh.kinds.iter().map(|&k| name(k)).collect();
+            volume.set_item("kind", kinds)?;
+            entry.set_item("volume", volume)?;
+        }
+        sides.append(entry)?;
+    }
+    Ok(sides)
+}
+
+/// `find_necks(vertices, faces, options, progress)`: `vertices` float64 `(n, 3)`, `faces`
+/// uint32 `(m, 3)` (both C-contiguous; the Python wrapper converts), `options` a dict of
+/// the CLI's option names. Returns `(report_json, sides)`.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, options, progress=None))]
+fn find_necks<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, u32>,
+    options: &Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(String, Bound<'py, PyList>)> {
+    let options = neck_options(options)?;
+    let (vertices, faces) = (vertices.as_array(), faces.as_array());
+    if vertices.ncols() != 3 || faces.ncols() != 3 {
+        return Err(NecklaceError::new_err(
+            "vertices and faces must have 3 columns",
+        ));
+    }
+    let surface = SurfaceMesh {
+        positions: vertices
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect(),
+        triangles: faces
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect(),
+    };
+    let reporter = progress.map(|callback| PyProgress {
+        callback,
+        state: Mutex::new(ProgressState {
+            stage: String::new(),
+            done: 0,
+            total: 0,
+            last_call: Instant::now(),
+            error: None,
+        }),
+    });
+    let report = py.detach(|| {
+        guarded(|| {
+            let silent = necklace::progress::Silent;
+            let progress: &dyn Progress = match &reporter {
+                Some(p) => p,
+                None => &silent,
+            };
+            necklace::pipeline::find_necks_with_progress(&surface, &options, progress)
+        })
+    });
+    if let Some(error) = reporter
+        .and_then(|r| r.state.into_inner().ok())
+        .and_then(|s| s.error)
+    {
+        return Err(error);
+    }
+    let report = report?;
+    let json = guarded(|| {
+        let value = necklace::output::report_json(&report, None)?;
+        serde_json::to_string(&value).map_err(|e| {
+            necklace::Error::new(
+                necklace::ErrorKind::Internal,
+                format!("cannot encode the report: {e}"),
+            )
+        })
+    })?;
+    Ok((json, side_arrays(py, &report)?))
+}
+
+/// `load_mesh(path)`: the vertices `(n, 3)` float64 and faces `(m, 3)` int64 of an OBJ,
+/// OFF, PLY or STL file (STL's corners merged).
+#[pyfunction]
+fn load_mesh(py: Python<'_>, path: PathBuf) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyAny>)> {
+    let mesh = py.detach(|| guarded(|| necklace::io::read_mesh(&path)))?;
+    let positions: Vec<f64> = mesh.positions.iter().flatten().copied().collect();
+    let faces: Vec<i64> = mesh
+        .triangles
+        .iter()
+        .flatten()
+        .map(|&v| i64::from(v))
+        .collect();
+    Ok((matrix(py, positions, 3)?, matrix(py, faces, 3)?))
+}
+
+/// `defaults()`: the library's default of every option `find_necks` takes (the Python
+/// signature's defaults are checked against these in the tests).
+#[pyfunction]
+fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let options = NeckOptions::default();
+    let out = PyDict::new(py);
+    out.set_item("handles", options.handles)?;
+    out.set_item("tunnels", options.tunnels)?;
+    out.set_item(
+        "schedule",
+        match options.morse.schedule {
+            Schedule::ScaleSpace => "scales",
+            Schedule::Paper => "paper",
+        },
+    )?;
+    out.set_item("levels", options.morse.levels)?;
+    out.set_item("min_bulge", options.morse.min_bulge)?;
+    out.set_item("min_levels", options.morse.min_levels)?;
+    out.set_item("steps", options.morse.steps)?;
+    out.set_item("tau", options.morse.tau)?;
+    out.set_item("h", options.volume.h)?;
+    out.set_item("max_tets", options.volume.max_tets)?;
+    out.set_item("max_steps", options.morse.max_steps)?;
+    out.set_item("plane_offsets", options.loops.plane_offsets)?;
+    out.set_item("slide_steps", options.loops.slide_steps)?;
+    out.set_item("min_opening", options.loops.min_opening)?;
+    out.set_item("max_flatness", options.loops.max_flatness)?;
+    out.set_item("volume", options.keep_volume)?;
+    Ok(out)
+}
+
+#[pymodule]
+fn _necklace(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("NecklaceError", m.py().get_type::<NecklaceError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("JSON_VERSION", necklace::output::JSON_VERSION)?;
+    m.add_function(wrap_pyfunction!(find_necks, m)?)?;
+    m.add_function(wrap_pyfunction!(load_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(defaults, m)?)?;
+    Ok(())
+}
