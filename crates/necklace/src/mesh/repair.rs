@@ -16,27 +16,27 @@ use std::collections::VecDeque;
 
 use super::{SurfaceMesh, Topology};
 
-/// `mesh` without the vertices no triangle uses, and how many were removed. The kept
-/// vertices keep their order.
-pub fn remove_unreferenced(mesh: &SurfaceMesh) -> (SurfaceMesh, usize) {
+/// `mesh` without the vertices no triangle uses, and for each vertex kept its index in
+/// `mesh` (the kept vertices keep their order; `mesh.positions.len() - kept.len()` were
+/// removed).
+pub fn remove_unreferenced(mesh: &SurfaceMesh) -> (SurfaceMesh, Vec<u32>) {
     let mut used = vec![false; mesh.positions.len()];
     for t in &mesh.triangles {
         for &v in t {
             used[v as usize] = true;
         }
     }
-    let removed = used.iter().filter(|&&u| !u).count();
-    if removed == 0 {
-        return (mesh.clone(), 0);
+    let kept: Vec<u32> = (0..mesh.positions.len() as u32)
+        .filter(|&v| used[v as usize])
+        .collect();
+    if kept.len() == mesh.positions.len() {
+        return (mesh.clone(), kept);
     }
     let mut new_index = vec![u32::MAX; mesh.positions.len()];
-    let mut positions = Vec::with_capacity(mesh.positions.len() - removed);
-    for (v, p) in mesh.positions.iter().enumerate() {
-        if used[v] {
-            new_index[v] = positions.len() as u32;
-            positions.push(*p);
-        }
+    for (i, &v) in kept.iter().enumerate() {
+        new_index[v as usize] = i as u32;
     }
+    let positions = kept.iter().map(|&v| mesh.positions[v as usize]).collect();
     let triangles = mesh
         .triangles
         .iter()
@@ -47,7 +47,7 @@ pub fn remove_unreferenced(mesh: &SurfaceMesh) -> (SurfaceMesh, usize) {
             positions,
             triangles,
         },
-        removed,
+        kept,
     )
 }
 
@@ -177,8 +177,10 @@ mod tests {
             *t = t.map(|v| v + 1);
         }
         mesh.positions.push([-5.0, 5.0, 5.0]);
-        let (clean, removed) = remove_unreferenced(&mesh);
+        let (clean, kept) = remove_unreferenced(&mesh);
+        let removed = mesh.positions.len() - kept.len();
         assert_eq!(removed, 2);
+        assert_eq!(kept, (1..=6).collect::<Vec<u32>>());
         assert_eq!(clean, octahedron());
     }
 

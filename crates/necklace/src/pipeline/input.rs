@@ -97,8 +97,8 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
     let mut warnings = Vec::new();
 
     // 1. Unreferenced vertices.
-    let (mut mesh, removed) = remove_unreferenced(&input);
-    let input_vertex = used_vertices(&input);
+    let (mut mesh, input_vertex) = remove_unreferenced(&input);
+    let removed = input.positions.len() - input_vertex.len();
     if removed > 0 {
         notes.push(format!(
             "removed {removed} vertices that no face uses (they would have set the bounding box)"
@@ -189,20 +189,6 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
         notes,
         warnings,
     })
-}
-
-/// The vertices of `mesh` that a face uses, in their order (what
-/// [`remove_unreferenced`] keeps).
-fn used_vertices(mesh: &SurfaceMesh) -> Vec<u32> {
-    let mut used = vec![false; mesh.positions.len()];
-    for t in &mesh.triangles {
-        for &v in t {
-            used[v as usize] = true;
-        }
-    }
-    (0..mesh.positions.len() as u32)
-        .filter(|&v| used[v as usize])
-        .collect()
 }
 
 /// Check that `mesh` is a closed, manifold surface and [`prepare_input`] it. An error
