@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 use necklace::loops::LoopOptions;
-use necklace::morse::{MorseOptions, Schedule};
+use necklace::morse::{MorseOptions, Preconditioner, Schedule, SolverOptions};
 use necklace::volume::{Mesher, VolumeOptions};
 
 #[derive(Parser)]
@@ -230,6 +230,11 @@ pub struct MethodArgs {
     /// take: more is refused before any work.
     #[arg(long, default_value_t = necklace::morse::DEFAULT_MAX_STEPS, allow_negative_numbers = true)]
     pub max_steps: usize,
+    /// Preconditioner of the heat steps' conjugate gradients: `jacobi` (the diagonal) or
+    /// `multigrid` (a smoothed-aggregation V-cycle: fewer, dearer iterations); the
+    /// fields agree to the solver's tolerance.
+    #[arg(long, value_enum, default_value_t = SolverArg::Jacobi)]
+    pub solver: SolverArg,
 }
 
 impl MethodArgs {
@@ -250,7 +255,26 @@ impl MethodArgs {
             steps: self.steps,
             tau: self.tau,
             max_steps: self.max_steps,
+            solver: SolverOptions {
+                preconditioner: self.solver.into(),
+                ..SolverOptions::default()
+            },
             ..MorseOptions::default()
+        }
+    }
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum SolverArg {
+    Jacobi,
+    Multigrid,
+}
+
+impl From<SolverArg> for Preconditioner {
+    fn from(s: SolverArg) -> Preconditioner {
+        match s {
+            SolverArg::Multigrid => Preconditioner::Multigrid,
+            SolverArg::Jacobi => Preconditioner::Jacobi,
         }
     }
 }

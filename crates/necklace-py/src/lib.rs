@@ -18,7 +18,7 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use necklace::loops::LoopOptions;
-use necklace::morse::{MorseOptions, Schedule};
+use necklace::morse::{MorseOptions, Preconditioner, Schedule, SolverOptions};
 use necklace::pipeline::{NeckOptions, NeckReport, TrackedPoint};
 use necklace::progress::Progress;
 use necklace::volume::VolumeOptions;
@@ -93,6 +93,15 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
             )))
         }
     };
+    let preconditioner = match option::<String>(options, "solver", "jacobi".into())?.as_str() {
+        "jacobi" => Preconditioner::Jacobi,
+        "multigrid" => Preconditioner::Multigrid,
+        other => {
+            return Err(NecklaceError::new_err(format!(
+                "option solver = '{other}': expected 'jacobi' or 'multigrid'"
+            )))
+        }
+    };
     let h = match options.get_item("h")? {
         Some(value) if !value.is_none() => Some(option::<f64>(options, "h", 0.0)?),
         _ => None,
@@ -113,6 +122,10 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
             steps: option(options, "steps", morse.steps)?,
             tau: option(options, "tau", morse.tau)?,
             max_steps: option(options, "max_steps", morse.max_steps)?,
+            solver: SolverOptions {
+                preconditioner,
+                ..morse.solver
+            },
             ..morse
         },
         loops: LoopOptions {
@@ -360,6 +373,13 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("h", options.volume.h)?;
     out.set_item("max_tets", options.volume.max_tets)?;
     out.set_item("max_steps", options.morse.max_steps)?;
+    out.set_item(
+        "solver",
+        match options.morse.solver.preconditioner {
+            Preconditioner::Multigrid => "multigrid",
+            Preconditioner::Jacobi => "jacobi",
+        },
+    )?;
     out.set_item("plane_offsets", options.loops.plane_offsets)?;
     out.set_item("slide_steps", options.loops.slide_steps)?;
     out.set_item("min_opening", options.loops.min_opening)?;

@@ -37,6 +37,14 @@ def test_dumbbell_same_loops_as_the_cli_and_its_neck_is_2_pi_r(cli, dumbbell):
     assert result.morse_ok
 
 
+def test_both_preconditioners_give_the_dumbbells_neck(dumbbell):
+    v, f = necklace.load_mesh(dumbbell)
+    jacobi = necklace.find_necks(v, f, handles=True, tunnels=False, solver="jacobi")
+    multigrid = necklace.find_necks(v, f, handles=True, tunnels=False, solver="multigrid")
+    assert [l.kind for l in jacobi.loops] == [l.kind for l in multigrid.loops] == ["handle"]
+    assert multigrid.loops[0].length == pytest.approx(jacobi.loops[0].length, rel=1e-6)
+
+
 def test_kitten_same_loops_as_the_cli(cli, kitten):
     v, f = necklace.load_mesh(kitten)
     result = necklace.find_necks(v, f)
@@ -153,6 +161,7 @@ def test_bad_input_raises_a_one_line_necklace_error(vertices, faces, message):
         dict(tau=0.0),
         dict(max_flatness=-1.0),
         dict(schedule="weekly"),
+        dict(solver="fast"),
         dict(handles=False, tunnels=False),
         dict(max_tets=10),
         dict(levels="many"),

@@ -367,6 +367,7 @@ def find_necks(
     h: Optional[float] = None,
     max_tets: int = 20_000_000,
     max_steps: int = 1000,
+    solver: str = "jacobi",
     plane_offsets: int = 16,
     slide_steps: int = 8,
     min_opening: float = 0.1,
@@ -396,6 +397,9 @@ def find_necks(
             box diagonal / 64).
         max_tets: the most tets a volume mesh may have (a larger run is refused).
         max_steps: the most heat steps a run may take.
+        solver: preconditioner of the heat steps' conjugate gradients: ``"jacobi"``
+            (the diagonal) or ``"multigrid"`` (a smoothed-aggregation V-cycle: fewer,
+            dearer iterations); the fields agree to the solver's tolerance.
         plane_offsets: parallel planes tried each way where the plane through a
             saddle has no curve around it (0.125 % of the diagonal apart).
         slide_steps: parallel planes (0.5 % of the diagonal apart) each way a
@@ -434,6 +438,7 @@ def find_necks(
         h=h,
         max_tets=max_tets,
         max_steps=max_steps,
+        solver=solver,
         plane_offsets=plane_offsets,
         slide_steps=slide_steps,
         min_opening=min_opening,

@@ -84,16 +84,55 @@ impl SparseMatrix {
 
     /// `y = A x` into a buffer of `n` entries, rows in parallel.
     pub fn mul_vec_into(&self, x: &[f64], y: &mut [f64]) {
-        y.par_iter_mut().enumerate().for_each(|(i, yi)| {
-            let range = self.row_start[i]..self.row_start[i + 1];
-            *yi = self.cols[range.clone()]
-                .iter()
-                .zip(&self.vals[range])
-                .map(|(&c, &v)| v * x[c as usize])
-                .sum();
+        row_products(&self.row_start, &self.cols, &self.vals, x, y, |yi, s| {
+            *yi = s
         });
     }
 }
+
+/// Each row's product with `x` of the compressed-row matrix `(row_start, cols, vals)`
+/// (any shape), stored into `y` by `store`. Rows run in parallel, each summed in its
+/// stored order, so the result does not depend on the thread count.
+pub(crate) fn row_products(
+    row_start: &[usize],
+    cols: &[u32],
+    vals: &[f64],
+    x: &[f64],
+    y: &mut [f64],
+    store: impl Fn(&mut f64, f64) + Sync,
+) {
+    y.par_chunks_mut(ROWS_PER_TASK)
+        .enumerate()
+        .for_each(|(chunk, ys)| {
+            let first = chunk * ROWS_PER_TASK;
+            for (k, yi) in ys.iter_mut().enumerate() {
+                let range = row_start[first + k]..row_start[first + k + 1];
+                let s: f64 = cols[range.clone()]
+                    .iter()
+                    .zip(&vals[range])
+                    .map(|(&c, &v)| v * x[c as usize])
+                    .sum();
+                store(yi, s);
+            }
+        });
+}
+
+/// Vector length of one unit of parallel work in [`chunked_dot`].
+pub(crate) const CHUNK: usize = 4096;
+
+/// Dot product summed over fixed chunks in a fixed order (thread-count independent).
+pub(crate) fn chunked_dot(a: &[f64], b: &[f64]) -> f64 {
+    let partial: Vec<f64> = a
+        .par_chunks(CHUNK)
+        .zip(b.par_chunks(CHUNK))
+        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x * y).sum())
+        .collect();
+    partial.iter().sum()
+}
+
+/// Rows per unit of parallel work in the products (each row is summed on its own, so
+/// the split does not change the result).
+const ROWS_PER_TASK: usize = 2048;
 
 /// Gradients of the four barycentric functions of a tet and its (signed) volume.
 fn gradients(p: [[f64; 3]; 4]) -> ([[f64; 3]; 4], f64) {

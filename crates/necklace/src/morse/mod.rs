@@ -51,6 +51,7 @@ pub mod critical;
 pub mod cycles;
 pub mod hessian;
 pub mod laplacian;
+pub mod multigrid;
 mod result;
 pub mod roles;
 mod selection;
@@ -78,7 +79,7 @@ pub use result::{
 };
 pub use roles::{RoleAt, Roles, SaddleRole, Sweep};
 use selection::{barcode, select_at_last_step, select_over_scales};
-pub use smoothing::{implicit_step, HeatSolver, SolverOptions, StepReport};
+pub use smoothing::{implicit_step, HeatSolver, Preconditioner, SolverOptions, StepReport};
 pub use tracking::{CriticalPoint, StepEvents, Track, Tracker};
 
 /// Which heat times to classify at.
@@ -376,6 +377,7 @@ pub fn analyze_with_progress(
         tau: solver.tau(),
         rescaled,
         solver: reports,
+        multigrid: solver.multigrid().cloned(),
         steps,
         saddles,
         rejected,

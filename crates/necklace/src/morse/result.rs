@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::multigrid::HierarchyInfo;
 use super::{Hessian, MorseExpectation, SaddleRole, Schedule, StepEvents, StepReport, Track};
 
 /// One classified step (a level of the scale space).
@@ -214,6 +215,9 @@ pub struct MorseResult {
     pub rescaled: bool,
     /// The solver's report for every heat step (`solver[k]` is step `k + 1`).
     pub solver: Vec<StepReport>,
+    /// With the multigrid preconditioner: its levels' sizes (`None` with Jacobi).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multigrid: Option<HierarchyInfo>,
     /// One summary per classified step.
     pub steps: Vec<StepSummary>,
     /// The selected 2-saddles, most persistent first, then by vertex.

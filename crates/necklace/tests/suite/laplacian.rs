@@ -86,7 +86,7 @@ fn stiffness_is_positive_semidefinite_and_mass_sums_to_volume() {
 
 mod smoothing {
     use super::*;
-    use necklace::morse::{implicit_step, SolverOptions};
+    use necklace::morse::{implicit_step, Preconditioner, SolverOptions};
 
     fn boundary(m: &TetMesh) -> Vec<bool> {
         m.kinds.iter().map(|&k| k != VertexKind::Interior).collect()
@@ -156,28 +156,13 @@ mod smoothing {
 
     #[test]
     fn more_stored_solutions_give_the_same_fields_in_fewer_iterations() {
-        use necklace::morse::HeatSolver;
         let m = torus_mesh();
-        let (l, mass, fixed) = (cotangent_stiffness(&m), lumped_mass(&m), boundary(&m));
-        let f = bumpy_field(&m, &fixed);
-        // A scale-space sequence: heat times t_k growing geometrically, τ_k = t_k − t_{k−1}.
         let run = |history: usize| {
             let options = SolverOptions {
                 history: Some(history),
                 ..SolverOptions::default()
             };
-            let mut solver = HeatSolver::new(&l, &mass, &fixed, &f, 1e-4, options);
-            let (mut g, mut iterations, mut previous_t) = (f.clone(), 0, 0.0);
-            for k in 0..12 {
-                let t = 1e-4 * 1.5f64.powi(k);
-                solver.set_tau(t - previous_t);
-                previous_t = t;
-                let (next, report) = solver.step(&g);
-                assert!(report.converged, "{report:?}");
-                iterations += report.iterations;
-                g = next;
-            }
-            (g, iterations)
+            scale_space(&m, options, 1.5)
         };
         let (one, few) = (run(1), run(6));
         for (a, b) in one.0.iter().zip(&few.0) {
@@ -189,5 +174,75 @@ mod smoothing {
             few.1,
             one.1
         );
+    }
+
+    fn with(preconditioner: Preconditioner) -> SolverOptions {
+        SolverOptions {
+            preconditioner,
+            ..SolverOptions::default()
+        }
+    }
+
+    /// A scale-space sequence of 12 heat steps (τ_k = t_k − t_{k−1}, t_k growing by
+    /// `growth`) from a bumpy field: the last field, the iterations and the multigrid
+    /// levels.
+    fn scale_space(
+        m: &TetMesh,
+        options: SolverOptions,
+        growth: f64,
+    ) -> (Vec<f64>, usize, Option<Vec<usize>>) {
+        use necklace::morse::HeatSolver;
+        let (l, mass, fixed) = (cotangent_stiffness(m), lumped_mass(m), boundary(m));
+        let f = bumpy_field(m, &fixed);
+        let mut solver = HeatSolver::new(&l, &mass, &fixed, &f, 1e-4, options);
+        let (mut g, mut iterations, mut previous_t) = (f.clone(), 0, 0.0);
+        for k in 0..12 {
+            let t = 1e-4 * growth.powi(k);
+            solver.set_tau(t - previous_t);
+            previous_t = t;
+            let (next, report) = solver.step(&g);
+            assert!(report.converged, "{report:?}");
+            iterations += report.iterations;
+            g = next;
+        }
+        (g, iterations, solver.multigrid().map(|h| h.sizes.clone()))
+    }
+
+    #[test]
+    fn multigrid_gives_jacobis_fields_in_fewer_iterations() {
+        let m = torus_mesh();
+        let jacobi = scale_space(&m, with(Preconditioner::Jacobi), 2.0);
+        let multigrid = scale_space(&m, with(Preconditioner::Multigrid), 2.0);
+        assert!(jacobi.2.is_none());
+        let sizes = multigrid.2.expect("a hierarchy");
+        assert!(
+            sizes.len() >= 2 && sizes.windows(2).all(|w| w[1] * 2 < w[0]),
+            "{sizes:?}"
+        );
+        let largest = jacobi.0.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        for (a, b) in jacobi.0.iter().zip(&multigrid.0) {
+            assert!((a - b).abs() < 1e-8 * largest, "{a} against {b}");
+        }
+        assert!(
+            2 * multigrid.1 < jacobi.1,
+            "{} multigrid iterations, {} Jacobi",
+            multigrid.1,
+            jacobi.1
+        );
+    }
+
+    #[test]
+    fn multigrid_does_not_depend_on_the_thread_count() {
+        let m = torus_mesh();
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| scale_space(&m, with(Preconditioner::Multigrid), 2.0))
+        };
+        let (one, three) = (run(1), run(3));
+        assert_eq!(one.0, three.0);
+        assert_eq!(one.1, three.1);
     }
 }
