@@ -119,6 +119,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             mesh,
             handles,
             tunnels,
+            one_side_at_a_time,
             method,
             plane_offsets,
             slide_steps,
@@ -143,6 +144,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
                 volume: method.volume(),
                 morse: method.morse(),
                 keep_volume: volume,
+                sides_at_once: !one_side_at_a_time,
             };
             let files = OutputOptions {
                 picture: png.then(RenderOptions::default),

@@ -12,6 +12,7 @@
 //!
 //! Units: the input's; positions in its frame. Entry points: `find_necks`, `load_mesh`.
 
+use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -136,6 +137,11 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
             ..loops
         },
         keep_volume: option(options, "volume", false)?,
+        sides_at_once: !option(
+            options,
+            "one_side_at_a_time",
+            !NeckOptions::default().sides_at_once,
+        )?,
     })
 }
 
@@ -148,22 +154,25 @@ struct PyProgress {
 }
 
 struct ProgressState {
-    stage: String,
-    done: u64,
-    total: u64,
+    /// Per lane (the two sides run at the same time): its stage, done, total.
+    lanes: BTreeMap<usize, (String, u64, u64)>,
     last_call: Instant,
     error: Option<PyErr>,
 }
 
 impl PyProgress {
-    fn call(&self, state: &mut ProgressState) {
+    /// Call back with `lane`'s stage.
+    fn call(&self, state: &mut ProgressState, lane: usize) {
         if state.error.is_some() {
             return;
         }
+        let Some((stage, done, total)) = state.lanes.get(&lane).cloned() else {
+            return;
+        };
         state.last_call = Instant::now();
         let result = Python::attach(|py| {
             self.callback
-                .call1(py, (state.stage.as_str(), state.done, state.total))
+                .call1(py, (stage.as_str(), done, total))
                 .map(drop)
         });
         if let Err(e) = result {
@@ -173,27 +182,30 @@ impl PyProgress {
 }
 
 impl Progress for PyProgress {
-    fn start(&self, stage: &str, total: u64) {
+    fn start_lane(&self, lane: usize, stage: &str, total: u64) {
         if let Ok(mut state) = self.state.lock() {
-            state.stage = stage.to_string();
-            (state.done, state.total) = (0, total);
-            self.call(&mut state);
+            state.lanes.insert(lane, (stage.to_string(), 0, total));
+            self.call(&mut state, lane);
         }
     }
 
-    fn advance(&self, units: u64) {
+    fn advance_lane(&self, lane: usize, units: u64) {
         if let Ok(mut state) = self.state.lock() {
-            state.done += units;
+            if let Some(entry) = state.lanes.get_mut(&lane) {
+                entry.1 += units;
+            }
             if state.last_call.elapsed() >= Duration::from_millis(200) {
-                self.call(&mut state);
+                self.call(&mut state, lane);
             }
         }
     }
 
-    fn finish(&self) {
+    fn finish_lane(&self, lane: usize) {
         if let Ok(mut state) = self.state.lock() {
-            state.done = state.done.max(state.total);
-            self.call(&mut state);
+            if let Some(entry) = state.lanes.get_mut(&lane) {
+                entry.1 = entry.1.max(entry.2);
+            }
+            self.call(&mut state, lane);
         }
     }
 }
@@ -299,9 +311,7 @@ fn find_necks<'py>(
     let reporter = progress.map(|callback| PyProgress {
         callback,
         state: Mutex::new(ProgressState {
-            stage: String::new(),
-            done: 0,
-            total: 0,
+            lanes: BTreeMap::new(),
             last_call: Instant::now(),
             error: None,
         }),
@@ -385,6 +395,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("min_opening", options.loops.min_opening)?;
     out.set_item("max_flatness", options.loops.max_flatness)?;
     out.set_item("volume", options.keep_volume)?;
+    out.set_item("one_side_at_a_time", !options.sides_at_once)?;
     Ok(out)
 }
 

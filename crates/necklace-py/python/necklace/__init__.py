@@ -373,6 +373,7 @@ def find_necks(
     min_opening: float = 0.1,
     max_flatness: float = 3.0,
     volume: bool = False,
+    one_side_at_a_time: bool = False,
     progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> NeckResult:
     """Find the neck loops of a closed triangle mesh.
@@ -410,6 +411,9 @@ def find_necks(
             saddle, such a saddle may have.
         volume: also return each side's tet mesh and smoothed field
             (:attr:`NeckResult.volume`).
+        one_side_at_a_time: run the two sides one after the other instead of at
+            the same time: slower, with the larger side's peak memory instead of
+            both sides'; the same results.
         progress: called as ``progress(stage, done, total)`` at each stage's start
             and end and at most every 0.2 s in between (``total`` 0 when unknown). An
             exception it raises is raised when the run ends.
@@ -444,6 +448,7 @@ def find_necks(
         min_opening=min_opening,
         max_flatness=max_flatness,
         volume=volume,
+        one_side_at_a_time=one_side_at_a_time,
     )
     if progress is not None and not callable(progress):
         raise NecklaceError("progress: not callable")

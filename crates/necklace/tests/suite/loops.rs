@@ -1148,3 +1148,35 @@ fn surface_points_index_the_input_even_when_unused_vertices_are_dropped() {
         }
     }
 }
+
+#[test]
+fn both_sides_at_once_give_the_report_of_one_side_after_the_other() {
+    let mesh = Shape::new(ShapeKind::Torus).mesh().unwrap();
+    let run = |sides_at_once: bool| {
+        let report = find_necks(
+            &mesh,
+            &NeckOptions {
+                sides_at_once,
+                ..NeckOptions::default()
+            },
+        )
+        .unwrap();
+        // Wall-clock seconds are all that may differ.
+        fn strip(value: &mut serde_json::Value) {
+            match value {
+                serde_json::Value::Object(map) => {
+                    map.retain(|k, _| k != "timings" && k != "seconds");
+                    map.values_mut().for_each(strip);
+                }
+                serde_json::Value::Array(items) => items.iter_mut().for_each(strip),
+                _ => {}
+            }
+        }
+        let mut json = serde_json::to_value(&report).unwrap();
+        strip(&mut json);
+        (report.loops.len(), json)
+    };
+    let (at_once, one_by_one) = (run(true), run(false));
+    assert_eq!(at_once.0, 2);
+    assert_eq!(at_once.1, one_by_one.1);
+}
