@@ -259,12 +259,9 @@ impl HeatSolver {
         if k == 0 {
             return fallback;
         }
-        // G_ij = x_i · A x_j (symmetrised), r_i = x_i · b.
-        let g = DMatrix::from_fn(k, k, |i, j| {
-            let (xi, bi) = &self.history[i];
-            let (xj, bj) = &self.history[j];
-            0.5 * (dot(xi, bj) + dot(xj, bi))
-        });
+        // G_ij = x_i · A x_j (symmetrised), r_i = x_i · b; each product x_i · b_j once.
+        let products = DMatrix::from_fn(k, k, |i, j| dot(&self.history[i].0, &self.history[j].1));
+        let g = DMatrix::from_fn(k, k, |i, j| 0.5 * (products[(i, j)] + products[(j, i)]));
         let r = DVector::from_fn(k, |i, _| dot(&self.history[i].0, b));
         let scale = g.diagonal().amax();
         let Some(y) = g
