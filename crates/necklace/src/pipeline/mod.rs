@@ -30,6 +30,7 @@ mod critical;
 mod input;
 mod report;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use crate::distance::SurfaceDistance;
@@ -166,13 +167,26 @@ pub fn find_necks_with_progress(
     // 2–6. Each side asked for, both at the same time (each side's own work is
     //      parallel too, but partly sequential: the sweeps, small solves); the inside
     //      (handles) first in the report.
+    // A side that fails stops the other at its next stage (its error is the run's).
+    let failed = AtomicBool::new(false);
     let run = |side: Side, lane: usize| {
         let progress = Lane {
             to: progress,
             lane,
             label: side.name(),
         };
-        find_side(&prepared, &surface_report, side, options, &progress)
+        let found = find_side(
+            &prepared,
+            &surface_report,
+            side,
+            options,
+            &progress,
+            &failed,
+        );
+        if found.is_err() {
+            failed.store(true, Ordering::Relaxed);
+        }
+        found
     };
     let runs = match (options.handles, options.tunnels) {
         (true, true) if options.sides_at_once => {
@@ -184,7 +198,10 @@ pub fn find_necks_with_progress(
         _ => vec![run(Side::Outside, 0)],
     };
     for found in runs {
-        report.add_side(found?);
+        // `None`: stopped because the other side failed; its error comes in turn.
+        if let Some(found) = found? {
+            report.add_side(found);
+        }
     }
     clock.lap();
     report.timings.seconds = clock.total();
@@ -194,14 +211,17 @@ pub fn find_necks_with_progress(
 }
 
 /// One side of the method on a prepared surface (`surface_report`: its report, for the
-/// genus the checks compare with): steps 2–6 of [`find_necks`].
+/// genus the checks compare with): steps 2–6 of [`find_necks`]. `None` when `stop` was
+/// raised (the other side failed) before one of its stages.
 fn find_side(
     prepared: &PreparedSurface,
     surface_report: &MeshReport,
     side: Side,
     options: &NeckOptions,
     progress: &dyn Progress,
-) -> Result<SideRun> {
+    stop: &AtomicBool,
+) -> Result<Option<SideRun>> {
+    let stopped = || stop.load(Ordering::Relaxed);
     let surface = &prepared.mesh;
     let name = side.name();
     let mut clock = Stopwatch::start();
@@ -214,17 +234,26 @@ fn find_side(
     let volume = volume?;
     warnings.extend(volume.warnings.iter().cloned());
     let volume_seconds = clock.lap();
+    if stopped() {
+        return Ok(None);
+    }
 
     // 3. The exact distance to the surface on its vertices.
     progress.start("distance", 0);
     let field = distance_field(&prepared.distance, &volume.mesh);
     progress.finish();
     let distance_seconds = clock.lap();
+    if stopped() {
+        return Ok(None);
+    }
 
     // 4. Smoothing over scale, critical points, the neck 2-saddles.
     let morse_options = morse_options_for(&options.morse, &volume);
     let result = morse::analyze_with_progress(&volume.mesh, &field, &morse_options, progress)?;
     let morse_seconds = clock.lap();
+    if stopped() {
+        return Ok(None);
+    }
 
     // 5. A loop per saddle: cut, tightened, selected. The paper's schedule reproduces
     // the paper's selection: no homology step.
@@ -326,13 +355,13 @@ fn find_side(
             values: result.field,
         }),
     };
-    Ok(SideRun {
+    Ok(Some(SideRun {
         report: side_report,
         morse: morse_check,
         loops: found.loops,
         dropped: found.dropped,
         warnings,
-    })
+    }))
 }
 
 /// A wall clock read in laps: each lap is the time since the one before, so the laps

@@ -294,3 +294,49 @@ fn refined_thin_parts_keep_dihedral_angles_above_eight_degrees() {
         }
     }
 }
+
+#[test]
+fn a_side_that_fails_stops_the_other_and_its_error_is_the_runs() {
+    use necklace::error::ErrorKind;
+    use necklace::pipeline::{find_necks_with_progress, NeckOptions};
+    use necklace::progress::Progress;
+    use std::sync::Mutex;
+
+    /// Records the names of the stages that start.
+    struct Stages(Mutex<Vec<String>>);
+    impl Progress for Stages {
+        fn start_lane(&self, _lane: usize, stage: &str, _total: u64) {
+            self.0.lock().unwrap().push(stage.to_string());
+        }
+        fn advance_lane(&self, _lane: usize, _units: u64) {}
+        fn finish_lane(&self, _lane: usize) {}
+    }
+
+    // A plate thinner than any cell the budget allows: its inside is refused at once,
+    // its outside meshes (with a warning). One thread: the inside runs first.
+    let plate = cuboid([0.0; 3], [1.0, 1.0, 1e-4]);
+    let options = NeckOptions {
+        volume: VolumeOptions {
+            max_tets: 400_000,
+            ..VolumeOptions::default()
+        },
+        ..NeckOptions::default()
+    };
+    let stages = Stages(Mutex::new(Vec::new()));
+    let err = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| find_necks_with_progress(&plate, &options, &stages))
+        .unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::OverBudget, "{err}");
+    let stages = stages.0.into_inner().unwrap();
+    assert!(
+        stages.contains(&"volume mesh (outside)".to_string()),
+        "{stages:?}"
+    );
+    assert!(
+        !stages.iter().any(|s| s.starts_with("smoothing")),
+        "the outside went on after the inside failed: {stages:?}"
+    );
+}
