@@ -415,8 +415,10 @@ def find_necks(
             the same time: slower, with the larger side's peak memory instead of
             both sides'; the same results.
         progress: called as ``progress(stage, done, total)`` at each stage's start
-            and end and at most every 0.2 s in between (``total`` 0 when unknown). An
-            exception it raises is raised when the run ends.
+            and end and at most every 0.2 s in between (``total`` 0 when unknown). The
+            two sides run at the same time, so their calls interleave; each stage's
+            name ends with its side, e.g. ``"volume mesh (outside)"``. An exception it
+            raises is raised when the run ends.
 
     Returns:
         A :class:`NeckResult`.
