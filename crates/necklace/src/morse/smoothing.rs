@@ -278,82 +278,20 @@ impl HeatSolver {
         x
     }
 
-    /// Preconditioned CG from `x`, with the multigrid V-cycle when there is a hierarchy.
-    fn solve(&self, b: &[f64], x: Vec<f64>) -> (Vec<f64>, StepReport) {
-        match &self.multigrid {
-            Some(multigrid) => self.solve_multigrid(multigrid, b, x),
-            None => self.solve_jacobi(b, x),
-        }
-    }
-
-    /// CG preconditioned by one V-cycle per iteration. Sums are taken over fixed chunks
-    /// in a fixed order.
-    fn solve_multigrid(
-        &self,
-        multigrid: &Hierarchy,
-        b: &[f64],
-        mut x: Vec<f64>,
-    ) -> (Vec<f64>, StepReport) {
-        let n = b.len();
-        let d = &self.inverse_diagonal;
-        let mut q = vec![0.0; n];
-        self.matrix.mul_vec_into(&x, &mut q);
-        let mut r: Vec<f64> = (0..n).map(|i| b[i] - q[i]).collect();
-        let b_norm = dot(b, b).sqrt().max(f64::MIN_POSITIVE);
-        let mut z = vec![0.0; n];
-        let mut work = Workspace::default();
-        let mut report = StepReport {
-            iterations: 0,
-            residual: dot(&r, &r).sqrt() / b_norm,
-            converged: false,
-        };
-        if report.residual <= self.options.tolerance {
-            report.converged = true;
-            return (x, report);
-        }
-        multigrid.apply(&self.matrix, d, &r, &mut z, &mut work);
-        let mut p = z.clone();
-        let mut rz = dot(&r, &z);
-        while report.residual > self.options.tolerance
-            && report.iterations < self.options.max_iterations
-        {
-            let pq = self.mul_vec_dot(&p, &mut q);
-            if pq <= 0.0 || !pq.is_finite() {
-                break;
-            }
-            let alpha = rz / pq;
-            let rr = update(&mut x, &mut r, &p, &q, alpha);
-            report.iterations += 1;
-            report.residual = rr.sqrt() / b_norm;
-            if report.residual <= self.options.tolerance {
-                break;
-            }
-            multigrid.apply(&self.matrix, d, &r, &mut z, &mut work);
-            let rz_next = dot(&r, &z);
-            if !(rz_next > 0.0 && rz_next.is_finite()) {
-                break;
-            }
-            let beta = rz_next / rz;
-            rz = rz_next;
-            p.par_iter_mut()
-                .zip(&z)
-                .for_each(|(p, z)| *p = z + beta * *p);
-        }
-        report.converged = report.residual <= self.options.tolerance;
-        (x, report)
-    }
-
-    /// Jacobi-preconditioned CG from `x`. Each iteration makes three passes over the
+    /// Preconditioned CG from `x`: Jacobi, or one multigrid V-cycle per iteration when
+    /// there is a hierarchy. With Jacobi each iteration makes three passes over the
     /// vectors: `q = A p` with `p · q`; the updates of `x`, `r`, `z` with `r · z` and
     /// `r · r`; and `p = z + β p`. Sums are taken over fixed chunks in a fixed order.
-    fn solve_jacobi(&self, b: &[f64], mut x: Vec<f64>) -> (Vec<f64>, StepReport) {
+    fn solve(&self, b: &[f64], mut x: Vec<f64>) -> (Vec<f64>, StepReport) {
         let n = b.len();
-        let d = &self.inverse_diagonal;
+        let tolerance = self.options.tolerance;
         let mut q = vec![0.0; n];
         self.matrix.mul_vec_into(&x, &mut q);
         let mut r: Vec<f64> = (0..n).map(|i| b[i] - q[i]).collect();
         let b_norm = dot(b, b).sqrt().max(f64::MIN_POSITIVE);
-        let mut z: Vec<f64> = (0..n).map(|i| r[i] * d[i]).collect();
+        let mut work = Workspace::default();
+        let mut z = vec![0.0; n];
+        self.precondition(&r, &mut z, &mut work);
         let mut p = z.clone();
         let mut rz = dot(&r, &z);
         let mut report = StepReport {
@@ -361,45 +299,93 @@ impl HeatSolver {
             residual: dot(&r, &r).sqrt() / b_norm,
             converged: false,
         };
-        while report.residual > self.options.tolerance
-            && report.iterations < self.options.max_iterations
-        {
+        while report.residual > tolerance && report.iterations < self.options.max_iterations {
             let pq = self.mul_vec_dot(&p, &mut q);
             if pq <= 0.0 || !pq.is_finite() {
                 break;
             }
             let alpha = rz / pq;
-            let sums: Vec<(f64, f64)> = x
-                .par_chunks_mut(CHUNK)
-                .zip(r.par_chunks_mut(CHUNK))
-                .zip(z.par_chunks_mut(CHUNK))
-                .enumerate()
-                .map(|(c, ((xc, rc), zc))| {
-                    let start = c * CHUNK;
-                    let (mut rz, mut rr) = (0.0, 0.0);
-                    for k in 0..xc.len() {
-                        let i = start + k;
-                        xc[k] += alpha * p[i];
-                        rc[k] -= alpha * q[i];
-                        zc[k] = rc[k] * d[i];
-                        rz += rc[k] * zc[k];
-                        rr += rc[k] * rc[k];
+            let (rz_next, rr) = match &self.multigrid {
+                None => self.jacobi_update(&mut x, &mut r, &mut z, &p, &q, alpha),
+                Some(multigrid) => {
+                    let rr = update(&mut x, &mut r, &p, &q, alpha);
+                    if rr.sqrt() / b_norm <= tolerance {
+                        // Converged: no cycle for a direction that is not taken.
+                        (rz, rr)
+                    } else {
+                        multigrid.apply(
+                            &self.matrix,
+                            &self.inverse_diagonal,
+                            &r,
+                            &mut z,
+                            &mut work,
+                        );
+                        (dot(&r, &z), rr)
                     }
-                    (rz, rr)
-                })
-                .collect();
-            let rz_next: f64 = sums.iter().map(|s| s.0).sum();
-            let rr: f64 = sums.iter().map(|s| s.1).sum();
+                }
+            };
+            report.iterations += 1;
+            report.residual = rr.sqrt() / b_norm;
+            if report.residual <= tolerance || !(rz_next > 0.0 && rz_next.is_finite()) {
+                break;
+            }
             let beta = rz_next / rz;
             rz = rz_next;
             p.par_iter_mut()
                 .zip(&z)
                 .for_each(|(p, z)| *p = z + beta * *p);
-            report.iterations += 1;
-            report.residual = rr.sqrt() / b_norm;
         }
-        report.converged = report.residual <= self.options.tolerance;
+        report.converged = report.residual <= tolerance;
         (x, report)
+    }
+
+    /// `z = B r`: the V-cycle, or the diagonal.
+    fn precondition(&self, r: &[f64], z: &mut [f64], work: &mut Workspace) {
+        let d = &self.inverse_diagonal;
+        match &self.multigrid {
+            Some(multigrid) => multigrid.apply(&self.matrix, d, r, z, work),
+            None => z
+                .par_iter_mut()
+                .zip(r)
+                .zip(d)
+                .for_each(|((z, r), d)| *z = r * d),
+        }
+    }
+
+    /// Jacobi's fused pass: `x += α p`, `r −= α q`, `z = D⁻¹ r`; returns `(r · z, r · r)`.
+    fn jacobi_update(
+        &self,
+        x: &mut [f64],
+        r: &mut [f64],
+        z: &mut [f64],
+        p: &[f64],
+        q: &[f64],
+        alpha: f64,
+    ) -> (f64, f64) {
+        let d = &self.inverse_diagonal;
+        let sums: Vec<(f64, f64)> = x
+            .par_chunks_mut(CHUNK)
+            .zip(r.par_chunks_mut(CHUNK))
+            .zip(z.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(c, ((xc, rc), zc))| {
+                let start = c * CHUNK;
+                let (mut rz, mut rr) = (0.0, 0.0);
+                for k in 0..xc.len() {
+                    let i = start + k;
+                    xc[k] += alpha * p[i];
+                    rc[k] -= alpha * q[i];
+                    zc[k] = rc[k] * d[i];
+                    rz += rc[k] * zc[k];
+                    rr += rc[k] * rc[k];
+                }
+                (rz, rr)
+            })
+            .collect();
+        (
+            sums.iter().map(|s| s.0).sum(),
+            sums.iter().map(|s| s.1).sum(),
+        )
     }
 
     /// `q = A p`, returning `p · q` (chunked, fixed order).
