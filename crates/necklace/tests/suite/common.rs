@@ -4,9 +4,9 @@
 
 use std::path::PathBuf;
 
-use necklace::shapes::Shape;
+use necklace::shapes::{Shape, ShapeKind};
 use necklace::volume::{Domain, Shell};
-use necklace::VertexKind;
+use necklace::{SurfaceMesh, VertexKind};
 
 /// The folder of shared real meshes: `$NECKLACE_MESHES`, else `../shared/data/meshes`
 /// beside the repository.
@@ -68,4 +68,34 @@ pub fn split_in_four(mesh: &necklace::SurfaceMesh) -> necklace::SurfaceMesh {
         triangles.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
     }
     necklace::SurfaceMesh::new(positions, triangles).unwrap()
+}
+
+/// The generated unit sphere (`res` its resolution) scaled to `radius` about `centre`.
+pub fn sphere(radius: f64, centre: [f64; 3], res: f64) -> SurfaceMesh {
+    let mut m = Shape::new(ShapeKind::Sphere)
+        .with("res", res)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    for p in &mut m.positions {
+        for k in 0..3 {
+            p[k] = centre[k] + radius * p[k];
+        }
+    }
+    m
+}
+
+/// One surface made of `parts` (vertices renumbered, nothing merged).
+pub fn union(parts: &[SurfaceMesh]) -> SurfaceMesh {
+    let mut out = SurfaceMesh {
+        positions: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for part in parts {
+        let n = out.positions.len() as u32;
+        out.positions.extend_from_slice(&part.positions);
+        out.triangles
+            .extend(part.triangles.iter().map(|t| t.map(|v| v + n)));
+    }
+    out
 }

@@ -3,6 +3,8 @@
 
 use std::f64::consts::PI;
 
+use crate::common::union;
+
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::volume::tetgen::{mesh_inside, mesh_shell};
 use necklace::{SurfaceMesh, TetMesh, VertexKind};
@@ -99,12 +101,7 @@ fn a_hollow_ball_keeps_its_cavity_empty() {
         *p = p.map(|c| 0.5 * c);
     }
     inner.flip_orientation();
-    let mut hollow = outer.clone();
-    let n = outer.positions.len() as u32;
-    hollow.positions.extend_from_slice(&inner.positions);
-    hollow
-        .triangles
-        .extend(inner.triangles.iter().map(|t| t.map(|v| v + n)));
+    let hollow = union(&[outer.clone(), inner]);
     let m = mesh_inside(&hollow).unwrap();
     assert_positive(&m);
     let exact = hollow.signed_volume();

@@ -3,12 +3,14 @@
 
 use std::f64::consts::PI;
 
+use crate::common::{sphere, union};
+
 use necklace::morse::{MorseOptions, Schedule, SolverOptions};
 use necklace::pipeline::{critical_points, surface_morse_expected};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::volume::{volume_mesh, VolumeOptions};
 use necklace::Side;
-use necklace::{io, SurfaceMesh, TetMesh, VertexKind};
+use necklace::{io, TetMesh, VertexKind};
 
 /// Connected components of the tets (through shared vertices).
 fn components(m: &TetMesh) -> usize {
@@ -40,20 +42,6 @@ fn components(m: &TetMesh) -> usize {
         .count()
 }
 
-fn sphere(res: f64, centre: [f64; 3]) -> SurfaceMesh {
-    let mut m = Shape::new(ShapeKind::Sphere)
-        .with("res", res)
-        .unwrap()
-        .mesh()
-        .unwrap();
-    for p in &mut m.positions {
-        for k in 0..3 {
-            p[k] += centre[k];
-        }
-    }
-    m
-}
-
 #[test]
 fn a_thin_dumbbell_neck_keeps_interior_vertices() {
     // Neck radius 0.05 on a dumbbell 2.8 long: thinner than 3h at the default h, so the
@@ -81,7 +69,7 @@ fn a_thin_dumbbell_neck_keeps_interior_vertices() {
 
 #[test]
 fn an_open_sphere_meshes_as_the_solid_it_bounds() {
-    let closed = sphere(24.0, [0.0; 3]);
+    let closed = sphere(1.0, [0.0; 3], 24.0);
     let reference = closed.signed_volume();
     let mut open = closed.clone();
     // Cut a cap (z > 0.9) out: a hole of radius about 0.44.
@@ -100,15 +88,10 @@ fn an_open_sphere_meshes_as_the_solid_it_bounds() {
 #[test]
 fn two_overlapping_spheres_mesh_as_their_union() {
     // Two unit spheres 1 apart, given as two intersecting closed meshes.
-    let a = sphere(24.0, [-0.5, 0.0, 0.0]);
-    let b = sphere(24.0, [0.5, 0.0, 0.0]);
-    let mut union = a.clone();
-    let n = a.positions.len() as u32;
-    union.positions.extend_from_slice(&b.positions);
-    union
-        .triangles
-        .extend(b.triangles.iter().map(|t| t.map(|v| v + n)));
-    let v = volume_mesh(&union, Side::Inside, &VolumeOptions::default()).unwrap();
+    let a = sphere(1.0, [-0.5, 0.0, 0.0], 24.0);
+    let b = sphere(1.0, [0.5, 0.0, 0.0], 24.0);
+    let both = union(&[a, b]);
+    let v = volume_mesh(&both, Side::Inside, &VolumeOptions::default()).unwrap();
     // Union = two balls − lens, lens = π (4r + d)(2r − d)² / 12.
     let exact = 2.0 * 4.0 / 3.0 * PI - PI * 5.0 / 12.0;
     let volume = v.mesh.volume();
@@ -253,7 +236,7 @@ fn the_mesh_does_not_depend_on_the_thread_count() {
 fn a_sphere_mesh_gives_the_papers_angle_bounds_and_its_volume() {
     // Through the mesh-based distance (not the analytic one): uniform lattice along a
     // smooth surface, so the paper's dihedral bounds (10.7°, 164.8°) must hold.
-    let surface = sphere(32.0, [0.0; 3]);
+    let surface = sphere(1.0, [0.0; 3], 32.0);
     let v = volume_mesh(&surface, Side::Inside, &VolumeOptions::default()).unwrap();
     let r = v.report();
     let exact = surface.signed_volume();
@@ -276,20 +259,10 @@ fn a_hollow_ball_keeps_its_cavity_in_both_modes() {
     // Outer sphere of radius 1 (outward) and an inner one of radius 0.5 facing inward:
     // the solid is the shell between them; outside it are the cavity and the space
     // beyond, two components of the exterior mesh.
-    let outer = sphere(24.0, [0.0; 3]);
-    let mut inner = sphere(24.0, [0.0; 3]);
-    for p in &mut inner.positions {
-        for c in p.iter_mut() {
-            *c *= 0.5;
-        }
-    }
+    let outer = sphere(1.0, [0.0; 3], 24.0);
+    let mut inner = sphere(0.5, [0.0; 3], 24.0);
     inner.flip_orientation();
-    let mut hollow = outer.clone();
-    let n = outer.positions.len() as u32;
-    hollow.positions.extend_from_slice(&inner.positions);
-    hollow
-        .triangles
-        .extend(inner.triangles.iter().map(|t| t.map(|v| v + n)));
+    let hollow = union(&[outer.clone(), inner]);
     let solid = hollow.signed_volume();
 
     let inside = volume_mesh(&hollow, Side::Inside, &VolumeOptions::default()).unwrap();

@@ -2,7 +2,7 @@
 //! many small parts, needles and plates at the budget, refusals, the angle bound in
 //! refined thin parts.
 
-use crate::common::Inside;
+use crate::common::{sphere, union, Inside};
 
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::tet::{ComponentTopology, TetTopology};
@@ -10,34 +10,6 @@ use necklace::volume::{expected_topology, volume_mesh, VolumeOptions};
 use necklace::volume::{stuff_volume, StuffingOptions};
 use necklace::Side;
 use necklace::{ErrorKind, SurfaceMesh};
-
-fn sphere(radius: f64, centre: [f64; 3], res: f64) -> SurfaceMesh {
-    let mut m = Shape::new(ShapeKind::Sphere)
-        .with("res", res)
-        .unwrap()
-        .mesh()
-        .unwrap();
-    for p in &mut m.positions {
-        for k in 0..3 {
-            p[k] = centre[k] + radius * p[k];
-        }
-    }
-    m
-}
-
-fn union(parts: &[SurfaceMesh]) -> SurfaceMesh {
-    let mut out = SurfaceMesh {
-        positions: Vec::new(),
-        triangles: Vec::new(),
-    };
-    for part in parts {
-        let n = out.positions.len() as u32;
-        out.positions.extend_from_slice(&part.positions);
-        out.triangles
-            .extend(part.triangles.iter().map(|t| t.map(|v| v + n)));
-    }
-    out
-}
 
 fn component(euler: i64, boundary: &[i64]) -> ComponentTopology {
     ComponentTopology {
