@@ -207,7 +207,8 @@ impl Hierarchy {
             mass: mass_values,
             diagonal_index: diagonal_index.to_vec(),
         };
-        let fine_weight = smoothing_weight(&fine);
+        let (fine_stiffness, fine_mass) = spectral_radii(&fine);
+        let fine_weight = smoothing_weight(fine_stiffness, fine_mass);
         let mut info = HierarchyInfo {
             sizes: vec![pattern.n],
             entries: vec![pattern.cols.len()],
@@ -215,29 +216,34 @@ impl Hierarchy {
         };
         let mut transfers = Vec::new();
         let mut levels: Vec<Level> = Vec::new();
-        let mut current = fine;
-        while current.matrix.n > COARSEST && levels.len() + 1 < MAX_LEVELS {
-            let aggregates = aggregate(&current);
+        // `ρ(D_L⁻¹ L)` of the level being coarsened.
+        let mut stiffness_radius = fine_stiffness;
+        while levels.len() + 1 < MAX_LEVELS {
+            let current = levels.last().map_or(&fine, |level| &level.operator);
+            if current.matrix.n <= COARSEST {
+                break;
+            }
+            let aggregates = aggregate(current);
             let count = aggregates.iter().filter(|&&a| a != u32::MAX).max();
             let Some(&count) = count else { break };
             let count = count as usize + 1;
             if (count as f64) * MIN_COARSENING > current.matrix.n as f64 {
                 break;
             }
-            let prolong = smoothed_prolongator(&current, &aggregates, count);
+            let prolong = smoothed_prolongator(current, &aggregates, count, stiffness_radius);
             let restrict = prolong.transpose();
-            let coarse = galerkin(&current, &prolong, &restrict);
+            let coarse = galerkin(current, &prolong, &restrict);
             info.sizes.push(coarse.matrix.n);
             info.entries.push(coarse.matrix.cols.len());
             info.transfer_entries.push(prolong.cols.len());
-            let weight = smoothing_weight(&coarse);
+            let (stiffness, mass) = spectral_radii(&coarse);
+            stiffness_radius = stiffness;
             transfers.push(Transfers { prolong, restrict });
             levels.push(Level {
-                operator: coarse.clone(),
+                operator: coarse,
                 inverse_diagonal: Vec::new(),
-                weight,
+                weight: smoothing_weight(stiffness, mass),
             });
-            current = coarse;
         }
         if levels.is_empty() {
             return None;
@@ -403,15 +409,17 @@ fn jacobi_sweeps(
     }
 }
 
-/// `4 / (3 ρ)` with `ρ` a bound of `ρ(D_A⁻¹ A)` for every `τ` (see the module doc).
-fn smoothing_weight(operator: &Operator) -> f64 {
-    let rho_l = spectral_radius(
-        &operator.matrix,
-        &operator.stiffness,
-        &operator.diagonal_index,
-    );
-    let rho_m = spectral_radius(&operator.matrix, &operator.mass, &operator.diagonal_index);
-    let rho = (rho_l.max(rho_m) * RADIUS_MARGIN).max(1.0);
+/// `ρ(D_L⁻¹ L)` and `ρ(D_M⁻¹ M)` of a level (estimates, see [`spectral_radius`]).
+fn spectral_radii(operator: &Operator) -> (f64, f64) {
+    let radius =
+        |values: &[f64]| spectral_radius(&operator.matrix, values, &operator.diagonal_index);
+    (radius(&operator.stiffness), radius(&operator.mass))
+}
+
+/// `4 / (3 ρ)` with `ρ` a bound of `ρ(D_A⁻¹ A)` for every `τ`: the larger of the two
+/// radii (see the module doc), widened by the margin.
+fn smoothing_weight(stiffness_radius: f64, mass_radius: f64) -> f64 {
+    let rho = (stiffness_radius.max(mass_radius) * RADIUS_MARGIN).max(1.0);
     4.0 / (3.0 * rho)
 }
 
@@ -508,10 +516,15 @@ fn aggregate(operator: &Operator) -> Vec<u32> {
 }
 
 /// `P = (I − ω D_L⁻¹ L) T`, `T` the aggregates' indicator, `ω = 4 / (3 ρ(D_L⁻¹ L))`.
-fn smoothed_prolongator(operator: &Operator, aggregates: &[u32], count: usize) -> Transfer {
+fn smoothed_prolongator(
+    operator: &Operator,
+    aggregates: &[u32],
+    count: usize,
+    stiffness_radius: f64,
+) -> Transfer {
     let m = &operator.matrix;
     let l = &operator.stiffness;
-    let rho = spectral_radius(m, l, &operator.diagonal_index) * RADIUS_MARGIN;
+    let rho = stiffness_radius * RADIUS_MARGIN;
     let omega = if rho > 0.0 { 4.0 / (3.0 * rho) } else { 0.0 };
     let rows: Vec<Vec<(u32, f64)>> = (0..m.n)
         .into_par_iter()
