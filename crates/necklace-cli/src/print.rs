@@ -133,18 +133,19 @@ pub fn critical_text(
     );
     let _ = writeln!(
         out,
-        "step  maxima  1-saddles  2-saddles  monkeys  morse sum (expected)  essential cycles ({})",
+        "step  maxima  1-saddles  2-saddles  monkeys  drained  morse sum (expected)  essential cycles ({})",
         result.cycle_rank
     );
     for s in &result.steps {
         let _ = writeln!(
             out,
-            "{:>4}  {:>6}  {:>9}  {:>9}  {:>7}  {:>4} ({}){}  {:>4}{}",
+            "{:>4}  {:>6}  {:>9}  {:>9}  {:>7}  {:>7}  {:>4} ({}){}  {:>4}{}",
             s.step,
             s.maxima,
             s.saddles1,
             s.saddles2,
             s.monkeys,
+            s.drained,
             s.morse_sum,
             s.morse_expected,
             if s.morse_ok { "" } else { "  MISMATCH" },

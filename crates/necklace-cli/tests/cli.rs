@@ -215,6 +215,7 @@ fn critical_json_has_the_documented_fields_and_writes_the_points() {
             "saddles1",
             "saddles2",
             "monkeys",
+            "drained",
             "morse_sum",
             "morse_expected",
             "morse_ok",

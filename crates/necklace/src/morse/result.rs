@@ -46,6 +46,10 @@ pub struct StepSummary {
     pub cycles_ok: bool,
     /// Births, deaths, moves and cancellations since the previous classified step.
     pub events: StepEvents,
+    /// Critical points (of any type, counted above) where the field has drained below
+    /// the solver's accuracy: not tracked, since their type is the solver's noise.
+    #[serde(default)]
+    pub drained: usize,
 }
 
 /// A selected 2-saddle.
