@@ -80,29 +80,39 @@ fn option<'py, T: FromPyObjectOwned<'py>>(
     }
 }
 
+/// A keyword argument naming one of `choices` (the first is the default).
+fn choice<T: Copy>(options: &Bound<'_, PyDict>, key: &str, choices: &[(&str, T)]) -> PyResult<T> {
+    let name = option::<String>(options, key, choices[0].0.into())?;
+    match choices.iter().find(|(n, _)| *n == name) {
+        Some(&(_, value)) => Ok(value),
+        None => {
+            let names: Vec<String> = choices.iter().map(|(n, _)| format!("'{n}'")).collect();
+            Err(NecklaceError::new_err(format!(
+                "option {key} = '{name}': expected {}",
+                names.join(" or ")
+            )))
+        }
+    }
+}
+
 /// The library's options from the keyword arguments (names as the CLI's flags).
 fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
     let loops = LoopOptions::default();
     let morse = MorseOptions::default();
     let volume = VolumeOptions::default();
-    let schedule = match option::<String>(options, "schedule", "scales".into())?.as_str() {
-        "scales" => Schedule::ScaleSpace,
-        "paper" => Schedule::Paper,
-        other => {
-            return Err(NecklaceError::new_err(format!(
-                "option schedule = '{other}': expected 'scales' or 'paper'"
-            )))
-        }
-    };
-    let preconditioner = match option::<String>(options, "solver", "jacobi".into())?.as_str() {
-        "jacobi" => Preconditioner::Jacobi,
-        "multigrid" => Preconditioner::Multigrid,
-        other => {
-            return Err(NecklaceError::new_err(format!(
-                "option solver = '{other}': expected 'jacobi' or 'multigrid'"
-            )))
-        }
-    };
+    let schedule = choice(
+        options,
+        "schedule",
+        &[("scales", Schedule::ScaleSpace), ("paper", Schedule::Paper)],
+    )?;
+    let preconditioner = choice(
+        options,
+        "solver",
+        &[
+            ("jacobi", Preconditioner::Jacobi),
+            ("multigrid", Preconditioner::Multigrid),
+        ],
+    )?;
     let h = match options.get_item("h")? {
         Some(value) if !value.is_none() => Some(option::<f64>(options, "h", 0.0)?),
         _ => None,

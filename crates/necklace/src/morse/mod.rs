@@ -308,7 +308,6 @@ pub fn analyze_with_progress(
         }),
         ..options.solver
     };
-
     let mut solver = HeatSolver::new(&stiffness, &mass, &fixed, field, first_tau, solver_options);
     let floor = options
         .drained_floor
@@ -620,24 +619,26 @@ fn critical_points(
     track_radius: f64,
     floor: f64,
 ) -> (Vec<CriticalPoint>, usize) {
-    let largest = f.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let (kept, drained): (Vec<usize>, Vec<usize>) = classification
+    let threshold = floor * f.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut drained = 0;
+    let points = classification
         .classes
         .iter()
         .enumerate()
         .filter(|(_, c)| !matches!(c.kind, VertexType::Regular | VertexType::Boundary))
-        .map(|(v, _)| v)
-        .partition(|&v| f[v].abs() > floor * largest);
-    let points = kept
-        .into_iter()
-        .map(|v| CriticalPoint {
+        .filter(|&(v, _)| {
+            let above = f[v].abs() > threshold;
+            drained += usize::from(!above);
+            above
+        })
+        .map(|(v, c)| CriticalPoint {
             vertex: v as u32,
-            kind: classification.classes[v].kind,
+            kind: c.kind,
             position: mesh.positions[v],
             radius: track_radius * mean_edge_length(mesh, v),
         })
         .collect();
-    (points, drained.len())
+    (points, drained)
 }
 
 /// Mean length of the edges at vertex `v` (each tet's edges at `v`, with repeats).

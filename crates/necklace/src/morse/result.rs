@@ -47,7 +47,8 @@ pub struct StepSummary {
     /// Births, deaths, moves and cancellations since the previous classified step.
     pub events: StepEvents,
     /// Critical points (of any type, counted above) where the field has drained below
-    /// the solver's accuracy: not tracked, since their type is the solver's noise.
+    /// [`MorseOptions::drained_floor`](super::MorseOptions::drained_floor) of its largest
+    /// value: not tracked, since there their type is the solver's noise.
     #[serde(default)]
     pub drained: usize,
 }
