@@ -22,41 +22,10 @@ pub struct Topology {
 const NO_EDGE: u32 = u32::MAX;
 
 impl Topology {
-    /// Build the adjacency of `mesh`. `O(F log F)`.
+    /// Build the adjacency of `mesh`. `O(F)` (a sort per vertex of its few sides).
     pub fn new(mesh: &SurfaceMesh) -> Self {
         let nv = mesh.num_vertices();
-        // Every triangle side as (undirected key, face, side), sorted by key.
-        let mut sides: Vec<(u64, u32, u8)> = Vec::with_capacity(3 * mesh.num_triangles());
-        for (f, t) in mesh.triangles.iter().enumerate() {
-            for i in 0..3 {
-                let (a, b) = (t[i], t[(i + 1) % 3]);
-                if a != b {
-                    let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-                    sides.push((key, f as u32, i as u8));
-                }
-            }
-        }
-        sides.sort_unstable();
-
-        let mut edges = Vec::new();
-        let mut edge_face_start = vec![0u32];
-        let mut edge_faces = Vec::with_capacity(sides.len());
-        let mut face_edges = vec![[NO_EDGE; 3]; mesh.num_triangles()];
-        for (i, &(key, f, side)) in sides.iter().enumerate() {
-            if i == 0 || sides[i - 1].0 != key {
-                if i > 0 {
-                    edge_face_start.push(edge_faces.len() as u32);
-                }
-                edges.push([(key >> 32) as u32, key as u32]);
-            }
-            edge_faces.push(f);
-            face_edges[f as usize][side as usize] = (edges.len() - 1) as u32;
-        }
-        if !edges.is_empty() {
-            edge_face_start.push(edge_faces.len() as u32);
-        }
-
-        // Vertex -> faces, by counting sort.
+        // Vertex -> faces, by counting sort (each vertex's faces in ascending order).
         let vertex_faces = Csr::new(
             nv,
             mesh.triangles
@@ -64,6 +33,47 @@ impl Topology {
                 .enumerate()
                 .flat_map(|(f, t)| t.map(|v| (v, f as u32))),
         );
+        // Every triangle side belongs to its lower vertex. Vertex by vertex, its sides
+        // (upper vertex, face, side) sorted give its edges in key order and each edge's
+        // faces in face order: the order of one sort of all sides, without that sort.
+        let mut edges = Vec::new();
+        let mut edge_face_start = vec![0u32];
+        let mut edge_faces = Vec::with_capacity(3 * mesh.num_triangles());
+        let mut face_edges = vec![[NO_EDGE; 3]; mesh.num_triangles()];
+        let mut sides: Vec<(u32, u32, u8)> = Vec::new();
+        for a in 0..nv {
+            sides.clear();
+            let mut previous = None;
+            for &f in vertex_faces.get(a) {
+                // A face that repeats `a` is listed once per corner: its sides once.
+                if previous == Some(f) {
+                    continue;
+                }
+                previous = Some(f);
+                let t = mesh.triangles[f as usize];
+                for i in 0..3 {
+                    let (u, w) = (t[i], t[(i + 1) % 3]);
+                    if u != w && u.min(w) as usize == a {
+                        sides.push((u.max(w), f, i as u8));
+                    }
+                }
+            }
+            sides.sort_unstable();
+            for (k, &(b, f, side)) in sides.iter().enumerate() {
+                if k == 0 || sides[k - 1].0 != b {
+                    if !edges.is_empty() {
+                        edge_face_start.push(edge_faces.len() as u32);
+                    }
+                    edges.push([a as u32, b]);
+                }
+                edge_faces.push(f);
+                face_edges[f as usize][side as usize] = (edges.len() - 1) as u32;
+            }
+        }
+        if !edges.is_empty() {
+            edge_face_start.push(edge_faces.len() as u32);
+        }
+
         // Vertex -> edges, in edge order.
         let vertex_edges = Csr::new(
             nv,
@@ -253,5 +263,66 @@ pub(crate) fn union(parent: &mut [usize], a: usize, b: usize) {
     if ra != rb {
         let (lo, hi) = (ra.min(rb), ra.max(rb));
         parent[hi] = lo;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::{Shape, ShapeKind};
+
+    /// Edges, each edge's faces, and each face's edges.
+    type Adjacency = (Vec<[u32; 2]>, Vec<Vec<u32>>, Vec<[u32; 3]>);
+
+    /// The edges, their faces and the faces' edges by the definition: every triangle
+    /// side keyed by its sorted endpoints, all sides sorted by (key, face, side).
+    fn by_one_sort(mesh: &SurfaceMesh) -> Adjacency {
+        let mut sides = Vec::new();
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            for i in 0..3 {
+                let (a, b) = (t[i], t[(i + 1) % 3]);
+                if a != b {
+                    sides.push(([a.min(b), a.max(b)], f as u32, i));
+                }
+            }
+        }
+        sides.sort_unstable();
+        let (mut edges, mut faces) = (Vec::<[u32; 2]>::new(), Vec::<Vec<u32>>::new());
+        let mut face_edges = vec![[NO_EDGE; 3]; mesh.num_triangles()];
+        for (key, f, i) in sides {
+            if edges.last() != Some(&key) {
+                edges.push(key);
+                faces.push(Vec::new());
+            }
+            faces.last_mut().unwrap().push(f);
+            face_edges[f as usize][i] = (edges.len() - 1) as u32;
+        }
+        (edges, faces, face_edges)
+    }
+
+    #[test]
+    fn adjacency_is_that_of_one_sort_of_all_sides() {
+        let mut mesh = Shape::new(ShapeKind::Torus).mesh().unwrap();
+        let n = mesh.num_vertices() as u32;
+        // A degenerate triangle (a repeated vertex), a third face on an edge, and an
+        // unused vertex.
+        let [a, b, c] = mesh.triangles[0];
+        mesh.triangles.push([a, b, a]);
+        mesh.triangles.push([b, a, c]);
+        mesh.triangles.push([c, c, c]);
+        mesh.positions.push([9.0, 9.0, 9.0]);
+        let topology = Topology::new(&mesh);
+        let (edges, faces, face_edges) = by_one_sort(&mesh);
+        assert_eq!(topology.edges(), &edges[..]);
+        for (e, expected) in faces.iter().enumerate() {
+            assert_eq!(topology.edge_faces(e), &expected[..], "edge {e}");
+        }
+        assert_eq!(topology.face_edges, face_edges);
+        assert!(topology.vertex_faces(n as usize).is_empty());
+        for (e, edge) in edges.iter().enumerate() {
+            for &v in edge {
+                assert!(topology.vertex_edges(v as usize).contains(&(e as u32)));
+            }
+        }
     }
 }
