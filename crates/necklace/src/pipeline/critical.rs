@@ -10,7 +10,9 @@ use crate::distance::SurfaceDistance;
 use crate::error::Result;
 use crate::mesh::{MeshReport, Side, SurfaceMesh};
 use crate::morse::{self, MorseOptions, MorseResult};
-use crate::volume::{volume_mesh_with, VolumeOptions, VolumeReport, VolumeResult};
+use crate::volume::{
+    survey_surface, volume_mesh_surveyed, VolumeOptions, VolumeReport, VolumeResult,
+};
 
 /// What [`find_critical_points`] computed.
 #[derive(Debug, Clone)]
@@ -30,7 +32,7 @@ impl CriticalRun {
             side: self.volume.side,
             volume: self.volume.report(),
             surface_morse_expected: surface_morse_expected(
-                &MeshReport::new(&self.prepared.mesh),
+                &self.prepared.mesh_report,
                 self.volume.side,
             ),
             morse: &self.result,
@@ -39,7 +41,8 @@ impl CriticalRun {
 }
 
 /// One side of a surface up to its selected 2-saddles: check the options, prepare the
-/// input ([`prepare_input`]), mesh the side (`volume::volume_mesh_with`), then
+/// input ([`prepare_input`]), survey the surface and mesh the side
+/// (`volume::survey_surface`, `volume::volume_mesh_surveyed`), then
 /// [`critical_points`].
 pub fn find_critical_points(
     mesh: SurfaceMesh,
@@ -49,7 +52,12 @@ pub fn find_critical_points(
 ) -> Result<CriticalRun> {
     options.check()?;
     let prepared = prepare_input(mesh)?;
-    let volume = volume_mesh_with(&prepared.mesh, &prepared.distance, side, volume_options)?;
+    let start = std::time::Instant::now();
+    let (surface, distance) = (&prepared.mesh, &prepared.distance);
+    let survey = survey_surface(surface, distance, &prepared.mesh_report, volume_options)?;
+    let mut volume = volume_mesh_surveyed(surface, distance, &survey, side)?;
+    // The volume stage of one side: its survey and its meshing.
+    volume.seconds = start.elapsed().as_secs_f64();
     let result = critical_points_with(&prepared.distance, &volume, options)?;
     Ok(CriticalRun {
         prepared,

@@ -41,6 +41,9 @@ pub struct PreparedSurface {
     pub mesh: SurfaceMesh,
     /// The report of the mesh as given ([`inspect_surface`]).
     pub report: MeshReport,
+    /// The report of `mesh`, the surface the stages work on ([`MeshReport::new`]; the
+    /// genus the checks compare with).
+    pub mesh_report: MeshReport,
     /// Whether any face was turned round to point outward (a whole inverted mesh, an
     /// inverted component, or faces that disagreed with their neighbours).
     pub flipped: bool,
@@ -65,15 +68,33 @@ pub struct PreparedSurface {
 /// (`inward_components`, and `outward` judged by it) and the number of crossing
 /// triangle pairs (`self_intersections`).
 pub fn inspect_surface(mesh: &SurfaceMesh) -> MeshReport {
-    inspect(mesh).0
+    inspect(mesh).report
 }
 
-/// [`inspect_surface`], the crossing pairs of triangles and the distance structure that
-/// found them (`None` for a mesh that is refused anyway).
-fn inspect(mesh: &SurfaceMesh) -> (MeshReport, Vec<[u32; 2]>, Option<SurfaceDistance>) {
-    let mut report = MeshReport::new(mesh);
+/// What [`inspect`] finds.
+struct Inspection {
+    /// [`inspect_surface`]'s report.
+    report: MeshReport,
+    /// [`MeshReport::new`] alone (without the measures that need the distance service).
+    plain: MeshReport,
+    /// The crossing pairs of triangles.
+    crossings: Vec<[u32; 2]>,
+    /// The distance structure that found them (`None` for a mesh refused anyway).
+    distance: Option<SurfaceDistance>,
+}
+
+/// [`inspect_surface`], with the plain report, the crossing pairs of triangles and the
+/// distance structure that found them.
+fn inspect(mesh: &SurfaceMesh) -> Inspection {
+    let plain = MeshReport::new(mesh);
+    let mut report = plain.clone();
     if mesh.triangles.is_empty() || report.max_abs_coordinate > MAX_COORDINATE {
-        return (report, Vec::new(), None);
+        return Inspection {
+            report,
+            plain,
+            crossings: Vec::new(),
+            distance: None,
+        };
     }
     let distance = SurfaceDistance::new(mesh);
     let crossings = distance.self_intersections(&mesh.triangles);
@@ -85,13 +106,23 @@ fn inspect(mesh: &SurfaceMesh) -> (MeshReport, Vec<[u32; 2]>, Option<SurfaceDist
             report.outward = Some(k == 0);
         }
     }
-    (report, crossings, Some(distance))
+    Inspection {
+        report,
+        plain,
+        crossings,
+        distance: Some(distance),
+    }
 }
 
 /// Check a mesh, repair what has one right answer and say what was done (see the
 /// module doc). Open, non-manifold or self-crossing input is accepted with warnings.
 pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
-    let (report, crossings, distance) = inspect(&input);
+    let Inspection {
+        report,
+        plain,
+        crossings,
+        distance,
+    } = inspect(&input);
     refuse_unusable(&report)?;
     let mut notes = Vec::new();
     let mut warnings = Vec::new();
@@ -124,8 +155,13 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
         ));
     }
 
-    // 3. Components that face into the solid they bound.
-    let oriented = MeshReport::new(&mesh);
+    // 3. Components that face into the solid they bound. (A report is a pass over
+    //    the whole mesh: each is made again only where the mesh has changed.)
+    let oriented = if mesh == input {
+        plain
+    } else {
+        MeshReport::new(&mesh)
+    };
     let mut flipped_components = 0;
     if oriented.outward.is_some() {
         let wrong = if report.self_intersections == Some(0) {
@@ -152,7 +188,11 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
         flipped_components = oriented.components;
         notes.push("faces flipped to point outward (negative volume)".into());
     }
-    let after = MeshReport::new(&mesh);
+    let after = if flipped_components == 0 {
+        oriented
+    } else {
+        MeshReport::new(&mesh)
+    };
     if after.flat {
         return Err(flat_error(&after));
     }
@@ -182,6 +222,7 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
     Ok(PreparedSurface {
         mesh,
         report,
+        mesh_report: after,
         distance,
         flipped: turned.flipped_faces > 0 || flipped_components > 0,
         crossing_faces,

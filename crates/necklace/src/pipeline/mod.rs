@@ -10,8 +10,10 @@
 //!    still unusual (open, non-manifold, crossing itself), and builds the surface's one
 //!    distance structure (`distance`) that every later step shares;
 //! 2. per side ([`Side::Inside`] for handles, [`Side::Outside`] for tunnels), the volume
-//!    mesh (`volume::volume_mesh_with`: the surface as a `volume::Domain`, sized for
-//!    thin parts, its topology checked against the surface's);
+//!    mesh (`volume::volume_mesh_surveyed`: the surface as a `volume::Domain`, sized for
+//!    thin parts, its topology checked against the surface's), from the one survey of
+//!    the surface both sides share (`volume::survey_surface`: thickness and gaps at
+//!    every vertex, creases, crossings; made before the sides start);
 //! 3. the exact distance field on its vertices ([`distance_field`]);
 //! 4. smoothing over scale, critical points and the neck 2-saddles (`morse`);
 //! 5. a loop per saddle (`loops`: plane cut, tightening, selection; on the volume
@@ -36,11 +38,11 @@ use std::time::Instant;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, Result};
 use crate::loops::{self, LoopOptions, NeckLoop, Role, Seed};
-use crate::mesh::{MeshReport, Side, SurfaceMesh};
+use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule};
 use crate::progress::{Lane, Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
-use crate::volume::{volume_mesh_with, VolumeOptions};
+use crate::volume::{survey_surface, volume_mesh_surveyed, SurfaceSurvey, VolumeOptions};
 
 pub use critical::{
     critical_points, critical_points_with, find_critical_points, morse_options_for,
@@ -161,9 +163,20 @@ pub fn find_necks_with_progress(
     // 1. The input, once: repaired, oriented, its problems said, its distance
     //    structure built for every stage of the run.
     let prepared = prepare_input(surface.clone())?;
-    let surface_report = MeshReport::new(&prepared.mesh);
     let mut report = NeckReport::new(&prepared);
     report.timings.input = clock.lap();
+    // 2a. What the volume stage measures on the surface: the same for both sides, so
+    //     measured once (on a dense surface most of the volume stage).
+    progress.start("surface survey", 0);
+    let survey = survey_surface(
+        &prepared.mesh,
+        &prepared.distance,
+        &prepared.mesh_report,
+        &options.volume,
+    );
+    progress.finish();
+    let survey = survey?;
+    report.timings.survey = clock.lap();
     // 2–6. Each side asked for, both at the same time (each side's own work is
     //      parallel too, but partly sequential: the sweeps, small solves); the inside
     //      (handles) first in the report.
@@ -175,14 +188,7 @@ pub fn find_necks_with_progress(
             lane,
             label: side.name(),
         };
-        let found = find_side(
-            &prepared,
-            &surface_report,
-            side,
-            options,
-            &progress,
-            &failed,
-        );
+        let found = find_side(&prepared, &survey, side, options, &progress, &failed);
         if found.is_err() {
             failed.store(true, Ordering::Relaxed);
         }
@@ -210,12 +216,11 @@ pub fn find_necks_with_progress(
     Ok(report)
 }
 
-/// One side of the method on a prepared surface (`surface_report`: its report, for the
-/// genus the checks compare with): steps 2–6 of [`find_necks`]. `None` when `stop` was
+/// One side of the method on a prepared surface: steps 2–6 of [`find_necks`]. `None` when `stop` was
 /// raised (the other side failed) before one of its stages.
 fn find_side(
     prepared: &PreparedSurface,
-    surface_report: &MeshReport,
+    survey: &SurfaceSurvey,
     side: Side,
     options: &NeckOptions,
     progress: &dyn Progress,
@@ -229,7 +234,7 @@ fn find_side(
 
     // 2. The volume mesh of this side.
     progress.start("volume mesh", 0);
-    let volume = volume_mesh_with(surface, &prepared.distance, side, &options.volume);
+    let volume = volume_mesh_surveyed(surface, &prepared.distance, survey, side);
     progress.finish();
     let volume = volume?;
     warnings.extend(volume.warnings.iter().cloned());
@@ -283,6 +288,7 @@ fn find_side(
     };
 
     // 6. The Morse and homology checks.
+    let surface_report = &prepared.mesh_report;
     let genus = surface_report
         .component_details
         .iter()

@@ -176,13 +176,19 @@ pub struct NeckReport {
 pub struct NeckTimings {
     /// The input step: checks, repairs, and the surface's distance structure.
     pub input: f64,
+    /// The volume stage's survey of the surface, shared by both sides (thickness and
+    /// gaps at every vertex, creases, crossings); the sides' `volume_mesh` is the
+    /// meshing alone.
+    #[serde(default)]
+    pub survey: f64,
     /// Inside (handles), when run.
     pub handles: Option<StageTimings>,
     /// Outside (tunnels), when run.
     pub tunnels: Option<StageTimings>,
     /// Sum over the sides run.
     pub total: StageTimings,
-    /// The whole run: `input` + `total.total`.
+    /// The whole run's wall clock: `input` + `survey` + `total.total` when the sides
+    /// run one after the other, less when they run at the same time.
     pub seconds: f64,
 }
 

@@ -76,8 +76,8 @@ pub use quality::QualityStats;
 use sizing::clamp_spacing;
 pub use sizing::{spacing_floor, SizingFeature};
 pub use surface::{
-    default_h, volume_mesh, volume_mesh_with, Mesher, TopologyCheck, VolumeOptions, VolumeReport,
-    VolumeResult, MAX_ROUNDS,
+    default_h, survey_surface, volume_mesh, volume_mesh_surveyed, volume_mesh_with, Mesher,
+    SurfaceSurvey, TopologyCheck, VolumeOptions, VolumeReport, VolumeResult, MAX_ROUNDS,
 };
 
 /// Options of the stuffing mesher.

@@ -19,17 +19,21 @@ pub fn expected_topology(surface: &SurfaceMesh, side: Side) -> Option<TetTopolog
     if !distance.self_intersections(&surface.triangles).is_empty() {
         return None;
     }
-    predict(surface, side)
+    predict(surface, &MeshReport::new(surface), side)
 }
 
-/// [`expected_topology`] of a surface known not to cross itself.
-pub(super) fn predict(surface: &SurfaceMesh, side: Side) -> Option<TetTopology> {
-    let report = MeshReport::new(surface);
+/// [`expected_topology`] of a surface known not to cross itself, whose
+/// [`MeshReport`] is `report`.
+pub(super) fn predict(
+    surface: &SurfaceMesh,
+    report: &MeshReport,
+    side: Side,
+) -> Option<TetTopology> {
     let comps = &report.component_details;
     if comps.is_empty() || comps.iter().any(|c| c.genus.is_none() || c.faces == 0) {
         return None;
     }
-    let parent = nesting(surface, &report)?;
+    let parent = nesting(surface, report)?;
     let outward: Vec<bool> = comps.iter().map(|c| c.signed_volume > 0.0).collect();
     // A region of space is bounded by one "owner" component and the components whose
     // parent is that owner; inside regions are owned by outward components, outside

@@ -37,13 +37,13 @@ use super::surface_sizing::{
     sharp_features, thickness, thin_part_sizing, CELLS_ACROSS, THIN_FACTOR,
 };
 use super::{
-    spacing_floor, stuff_volume, Shell, SizingFeature, StuffingOptions, StuffingStats,
-    SurfaceInside, VolumeMesh, DEFAULT_MAX_TETS,
+    spacing_floor, stuff_volume, SharpFeatures, Shell, SizingFeature, StuffingOptions,
+    StuffingStats, SurfaceInside, VolumeMesh, DEFAULT_MAX_TETS,
 };
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, norm, scale, sub};
-use crate::mesh::{Side, SurfaceMesh, Topology};
+use crate::mesh::{MeshReport, Side, SurfaceMesh, Topology};
 use crate::tet::{TetMesh, TetTopology, VertexKind};
 
 /// Which volume mesher to use.
@@ -282,6 +282,57 @@ pub fn volume_mesh_with(
     options: &VolumeOptions,
 ) -> Result<VolumeResult> {
     let start = Instant::now();
+    let survey = survey_surface(surface, distance, &MeshReport::new(surface), options)?;
+    let mut result = volume_mesh_surveyed(surface, distance, &survey, side)?;
+    result.seconds = start.elapsed().as_secs_f64();
+    Ok(result)
+}
+
+/// What the volume stage measures on a surface before it meshes a side (steps 1–3 of
+/// the module doc, and the crossing pairs of triangles). None of it depends on the
+/// side, so a run that meshes both sides surveys once ([`survey_surface`]) and meshes
+/// each from the survey ([`volume_mesh_surveyed`]); on a dense surface the survey is
+/// most of the stage (a ray and an inscribed ball at every vertex).
+#[derive(Debug, Clone)]
+pub struct SurfaceSurvey {
+    /// The options it was made for (the lattice spacing `h` resolved in `h`).
+    pub options: VolumeOptions,
+    /// The lattice spacing along the surface.
+    pub h: f64,
+    /// Surface vertices whose part or gap is thinner than `2h` (0 for TetGen, which
+    /// is not sized).
+    pub thin_vertices: usize,
+    /// The surface's report (components, genus: the prediction's input).
+    report: MeshReport,
+    /// The crossing pairs of triangles.
+    crossings: Vec<[u32; 2]>,
+    /// What the stuffing mesher sizes and snaps by (`None` for TetGen).
+    sizing: Option<SurfaceSizing>,
+}
+
+/// The stuffing mesher's part of a [`SurfaceSurvey`].
+#[derive(Debug, Clone)]
+struct SurfaceSizing {
+    /// Per vertex, the thickness of the solid and the width of the gap (infinite where
+    /// not thin).
+    thickness: Vec<[f64; 2]>,
+    /// Per vertex, the cell size asked for (half the thinner of the two, at most `h`).
+    spacing: Vec<f64>,
+    /// Thin parts, gaps and the crossing curve as sizing features.
+    sizing: Vec<SizingFeature>,
+    /// Creases, corners and the crossing curve to snap onto.
+    features: SharpFeatures,
+}
+
+/// Survey a closed, outward-oriented surface for meshing its sides with `options`
+/// (`report`: the surface's [`MeshReport`]; `distance`: its distance structure). Checks
+/// the options first.
+pub fn survey_surface(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    report: &MeshReport,
+    options: &VolumeOptions,
+) -> Result<SurfaceSurvey> {
     let (lo, hi) = check_surface(surface)?;
     let diagonal = norm(sub(hi, lo));
     let h = options.h.unwrap_or_else(|| default_h(surface));
@@ -299,20 +350,49 @@ pub fn volume_mesh_with(
             options.sphere_scale
         )));
     }
+    let crossings = match distance.crossings() {
+        Some(recorded) => recorded.to_vec(),
+        None => distance.self_intersections(&surface.triangles),
+    };
+    let sizing = match options.mesher {
+        Mesher::Stuffing => Some(size_surface(surface, distance, &crossings, h)),
+        Mesher::Tetgen => None,
+    };
+    let thin_vertices = sizing.as_ref().map_or(0, |s| {
+        s.thickness
+            .iter()
+            .filter(|t| t.iter().any(|x| x.is_finite()))
+            .count()
+    });
+    Ok(SurfaceSurvey {
+        options: *options,
+        h,
+        thin_vertices,
+        report: report.clone(),
+        crossings,
+        sizing,
+    })
+}
 
+/// Mesh one side of a surveyed surface (`surface` and `distance`: those the survey was
+/// made of).
+pub fn volume_mesh_surveyed(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    survey: &SurfaceSurvey,
+    side: Side,
+) -> Result<VolumeResult> {
+    let start = Instant::now();
+    let options = &survey.options;
+    let h = survey.h;
+    let (lo, hi) = check_surface(surface)?;
+    let diagonal = norm(sub(hi, lo));
     let centre = scale(add(lo, hi), 0.5);
     let radius = options.sphere_scale * 0.5 * diagonal;
     let mut warnings = Vec::new();
-    let found;
-    let crossings = match distance.crossings() {
-        Some(recorded) => recorded,
-        None => {
-            found = distance.self_intersections(&surface.triangles);
-            &found[..]
-        }
-    };
+    let crossings = &survey.crossings[..];
     let expected = if crossings.is_empty() {
-        predict(surface, side)
+        predict(surface, &survey.report, side)
     } else {
         warnings.push(format!(
             "the surface crosses itself ({} pairs of triangles): the {} volume is the solid its winding number encloses, whose topology the genus does not predict",
@@ -321,31 +401,25 @@ pub fn volume_mesh_with(
         ));
         None
     };
-    let (mesh, found, stats, thin_vertices, rounds) = match options.mesher {
-        Mesher::Stuffing => {
+    let (mesh, found, stats, rounds) = match &survey.sizing {
+        Some(sizing) => {
             let sphere = (side == Side::Outside).then_some((centre, radius));
-            let (stuffed, found, thin_vertices, rounds) = stuff_surface(
+            let (stuffed, found, rounds) = stuff_surface(
                 surface,
                 distance,
-                crossings,
+                sizing,
                 sphere,
                 h,
                 options,
                 &expected,
                 &mut warnings,
             )?;
-            (
-                stuffed.mesh,
-                found,
-                Some(stuffed.stats),
-                thin_vertices,
-                rounds,
-            )
+            (stuffed.mesh, found, Some(stuffed.stats), rounds)
         }
-        Mesher::Tetgen => {
+        None => {
             let mesh = tetgen_mesh(surface, side, centre, radius)?;
             let found = mesh.topology();
-            (mesh, found, None, 0, 1)
+            (mesh, found, None, 1)
         }
     };
     if mesh.num_tets() == 0 {
@@ -411,7 +485,7 @@ pub fn volume_mesh_with(
         sphere: (side == Side::Outside).then_some((centre, radius)),
         mesher: options.mesher,
         stats,
-        thin_vertices,
+        thin_vertices: survey.thin_vertices,
         topology: TopologyCheck {
             expected,
             found,
@@ -441,22 +515,14 @@ fn check_surface(surface: &SurfaceMesh) -> Result<([f64; 3], [f64; 3])> {
     Ok((lo, hi))
 }
 
-/// The stuffing mesher on one side of the surface (`sphere`: the outer sphere's centre
-/// and radius for the shell, `None` inside): thickness and gaps measured into sizing
-/// features, creases (and the curve where the surface crosses itself) to snap onto,
-/// then meshings until the topology matches. Returns the mesh, its topology, the
-/// number of thin vertices and the rounds.
-#[allow(clippy::too_many_arguments)]
-fn stuff_surface(
+/// The stuffing mesher's survey of a surface: thickness and gaps measured into sizing
+/// features, creases (and the curve where the surface crosses itself) to snap onto.
+fn size_surface(
     surface: &SurfaceMesh,
     distance: &SurfaceDistance,
     crossings: &[[u32; 2]],
-    sphere: Option<([f64; 3], f64)>,
     h: f64,
-    options: &VolumeOptions,
-    expected: &Option<TetTopology>,
-    warnings: &mut Vec<String>,
-) -> Result<(VolumeMesh, TetTopology, usize, usize)> {
+) -> SurfaceSizing {
     // Where the surface crosses itself a "thickness" measures the crossing: the
     // crossing triangles and the ring around them are not sized.
     let mut crossing = vec![false; surface.num_vertices()];
@@ -477,11 +543,7 @@ fn stuff_surface(
     }
     let topology = Topology::new(surface);
     let thickness = thickness(surface, &topology, distance, &crossing, THIN_FACTOR * h);
-    let thin_vertices = thickness
-        .iter()
-        .filter(|t| t.iter().any(|x| x.is_finite()))
-        .count();
-    let mut spacing: Vec<f64> = thickness
+    let spacing: Vec<f64> = thickness
         .iter()
         .map(|t| (t[0].min(t[1]) / CELLS_ACROSS).min(h))
         .collect();
@@ -508,13 +570,42 @@ fn stuff_surface(
         reach: 2.0 * crease_cell,
         toward: [0.0; 3],
     }));
+    SurfaceSizing {
+        thickness,
+        spacing,
+        sizing,
+        features,
+    }
+}
+
+/// The stuffing mesher on one side of a sized surface (`sphere`: the outer sphere's
+/// centre and radius for the shell, `None` inside): meshings until the topology
+/// matches. Returns the mesh, its topology and the rounds.
+#[allow(clippy::too_many_arguments)]
+fn stuff_surface(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    surveyed: &SurfaceSizing,
+    sphere: Option<([f64; 3], f64)>,
+    h: f64,
+    options: &VolumeOptions,
+    expected: &Option<TetTopology>,
+    warnings: &mut Vec<String>,
+) -> Result<(VolumeMesh, TetTopology, usize)> {
+    let SurfaceSizing {
+        thickness,
+        spacing,
+        sizing,
+        features,
+    } = surveyed;
+    let mut spacing = spacing.clone();
     let stuffing = StuffingOptions {
         h,
         max_tets: options.max_tets,
         min_dihedral_deg: options.min_dihedral_deg,
     };
     if sphere.is_none() {
-        refuse_if_all_below_floor(&sizing, &thickness, &stuffing)?;
+        refuse_if_all_below_floor(sizing, thickness, &stuffing)?;
     }
     let bounds = surface.bounding_box().unwrap_or_default();
     // One meshing with the surface's sizing and `extra` (refinements from earlier
@@ -533,7 +624,7 @@ fn stuff_surface(
     };
     let (stuffed, found, rounds) =
         mesh_until_topology_matches(surface, &stuff, &mut spacing, expected, warnings)?;
-    Ok((stuffed, found, thin_vertices, rounds))
+    Ok((stuffed, found, rounds))
 }
 
 /// Mesh, compare with the prediction, refine where the mesh shows a feature below the
