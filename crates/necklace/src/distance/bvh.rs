@@ -86,63 +86,23 @@ impl Bvh {
         self.nodes.first().map_or(0.0, |n| norm(sub(n.hi, n.lo)))
     }
 
-    /// Build over `tris` (corners) with their mesh face indices `faces`.
+    /// Build over `tris` (corners) with their mesh face indices `faces`. The top of the
+    /// tree, where a node holds more than [`PARALLEL_SPLIT`] triangles, builds its two
+    /// halves at the same time; the tree is the same whatever the thread count.
     pub fn build(tris: Vec<[[f64; 3]; 3]>, faces: Vec<u32>) -> Bvh {
+        use rayon::prelude::*;
         let n = tris.len();
         if n == 0 {
             return Bvh::default();
         }
         let centroids: Vec<[f64; 3]> = tris
-            .iter()
+            .par_iter()
             .map(|t| scale(add(add(t[0], t[1]), t[2]), 1.0 / 3.0))
             .collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut nodes = vec![Node {
-            lo: [0.0; 3],
-            hi: [0.0; 3],
-            left: 0,
-            start: 0,
-            end: n as u32,
-        }];
-        let mut todo = vec![0usize];
-        while let Some(ni) = todo.pop() {
-            let (s, e) = (nodes[ni].start as usize, nodes[ni].end as usize);
-            let (lo, hi) = bounds(order[s..e].iter().flat_map(|&i| tris[i as usize]));
-            nodes[ni].lo = lo;
-            nodes[ni].hi = hi;
-            if e - s <= LEAF_SIZE {
-                continue;
-            }
-            let (clo, chi) = bounds(order[s..e].iter().map(|&i| centroids[i as usize]));
-            let ext = sub(chi, clo);
-            let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
-                0
-            } else if ext[1] >= ext[2] {
-                1
-            } else {
-                2
-            };
-            let mid = s + (e - s) / 2;
-            // Ties (and equal centroids) split by index position, which still halves.
-            order[s..e].select_nth_unstable_by(mid - s, |&a, &b| {
-                centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
-            });
-            let left = nodes.len();
-            for (start, end) in [(s, mid), (mid, e)] {
-                nodes.push(Node {
-                    lo: [0.0; 3],
-                    hi: [0.0; 3],
-                    left: 0,
-                    start: start as u32,
-                    end: end as u32,
-                });
-            }
-            nodes[ni].left = left as u32;
-            todo.push(left);
-            todo.push(left + 1);
-        }
-        let tris_sorted = order.iter().map(|&i| tris[i as usize]).collect();
-        let faces_sorted = order.iter().map(|&i| faces[i as usize]).collect();
+        let nodes = subtree(&tris, &centroids, &mut order, 0);
+        let tris_sorted = order.par_iter().map(|&i| tris[i as usize]).collect();
+        let faces_sorted = order.par_iter().map(|&i| faces[i as usize]).collect();
         Bvh {
             nodes,
             tris: tris_sorted,
@@ -285,6 +245,121 @@ impl Bvh {
     }
 }
 
+/// A node holding more triangles than this builds its two halves at the same time.
+const PARALLEL_SPLIT: usize = 1 << 15;
+
+/// The nodes of the subtree over the triangles `order` (indices into `tris` and
+/// `centroids`; the first is number `offset` in tree order), with its root at index 0
+/// and children indexed within the returned nodes. `order` is left in tree order.
+fn subtree(
+    tris: &[[[f64; 3]; 3]],
+    centroids: &[[f64; 3]],
+    order: &mut [u32],
+    offset: usize,
+) -> Vec<Node> {
+    let n = order.len();
+    if n <= PARALLEL_SPLIT {
+        return sequential_subtree(tris, centroids, order, offset);
+    }
+    let (lo, hi) = bounds(order.iter().flat_map(|&i| tris[i as usize]));
+    let mid = split(centroids, order);
+    let (first, second) = order.split_at_mut(mid);
+    let (left, right) = rayon::join(
+        || subtree(tris, centroids, first, offset),
+        || subtree(tris, centroids, second, offset + mid),
+    );
+    // The root, its two children, the rest of the left subtree, the rest of the right.
+    let (nl, nr) = (left.len(), right.len());
+    let mut nodes = Vec::with_capacity(1 + nl + nr);
+    nodes.push(Node {
+        lo,
+        hi,
+        left: 1,
+        start: offset as u32,
+        end: (offset + n) as u32,
+    });
+    // A child's index j > 0 in its own subtree moves to j + 2 (left) or j + nl + 1
+    // (right); its root moves to 1 (left) or 2 (right).
+    let moved = |node: &Node, shift: usize| Node {
+        left: if node.is_leaf() {
+            0
+        } else {
+            node.left + shift as u32
+        },
+        ..*node
+    };
+    nodes.push(moved(&left[0], 2));
+    nodes.push(moved(&right[0], nl + 1));
+    nodes.extend(left[1..].iter().map(|node| moved(node, 2)));
+    nodes.extend(right[1..].iter().map(|node| moved(node, nl + 1)));
+    nodes
+}
+
+/// [`subtree`] on one thread: nodes in the order they are split (depth first).
+fn sequential_subtree(
+    tris: &[[[f64; 3]; 3]],
+    centroids: &[[f64; 3]],
+    order: &mut [u32],
+    offset: usize,
+) -> Vec<Node> {
+    let mut nodes = vec![Node {
+        lo: [0.0; 3],
+        hi: [0.0; 3],
+        left: 0,
+        start: 0,
+        end: order.len() as u32,
+    }];
+    let mut todo = vec![0usize];
+    while let Some(ni) = todo.pop() {
+        let (s, e) = (nodes[ni].start as usize, nodes[ni].end as usize);
+        let (lo, hi) = bounds(order[s..e].iter().flat_map(|&i| tris[i as usize]));
+        nodes[ni].lo = lo;
+        nodes[ni].hi = hi;
+        if e - s <= LEAF_SIZE {
+            continue;
+        }
+        let mid = s + split(centroids, &mut order[s..e]);
+        let left = nodes.len();
+        for (start, end) in [(s, mid), (mid, e)] {
+            nodes.push(Node {
+                lo: [0.0; 3],
+                hi: [0.0; 3],
+                left: 0,
+                start: start as u32,
+                end: end as u32,
+            });
+        }
+        nodes[ni].left = left as u32;
+        todo.push(left);
+        todo.push(left + 1);
+    }
+    for node in &mut nodes {
+        node.start += offset as u32;
+        node.end += offset as u32;
+    }
+    nodes
+}
+
+/// Split `order` (a node's triangles) at the median of their centroids along the
+/// longest axis of the centroid bounds; returns the first index of the second half.
+fn split(centroids: &[[f64; 3]], order: &mut [u32]) -> usize {
+    let (clo, chi) = bounds(order.iter().map(|&i| centroids[i as usize]));
+    let ext = sub(chi, clo);
+    let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
+        0
+    } else if ext[1] >= ext[2] {
+        1
+    } else {
+        2
+    };
+    let mid = order.len() / 2;
+    // Ties (and equal centroids) split by index position, which still halves.
+    order.select_nth_unstable_by(mid, |&a, &b| {
+        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+    });
+    mid
+}
+
 /// Axis-aligned bounds of some points (NaN coordinates are ignored by `min`/`max`).
 fn bounds(points: impl Iterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
@@ -355,4 +430,78 @@ fn ray_triangle(o: [f64; 3], d: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3])
     }
     let t = dot(e2, qv) * inv;
     t.is_finite().then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Small triangles scattered through a box by a fixed sequence (a linear
+    /// congruential generator), more than one parallel split's worth.
+    fn scattered(n: usize) -> Vec<[[f64; 3]; 3]> {
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let p = [next(), 2.0 * next(), 0.5 * next()];
+                [
+                    p,
+                    add(p, [0.01 * next(), 0.0, 0.0]),
+                    add(p, [0.0, 0.01, 0.01]),
+                ]
+            })
+            .collect()
+    }
+
+    /// The subtree at `a` of one layout equals the subtree at `b` of the other: the same
+    /// boxes and triangle ranges, node by node.
+    fn same_tree(x: &[Node], a: usize, y: &[Node], b: usize) {
+        let (p, q) = (x[a], y[b]);
+        assert_eq!((p.lo, p.hi, p.start, p.end), (q.lo, q.hi, q.start, q.end));
+        assert_eq!(p.is_leaf(), q.is_leaf());
+        if !p.is_leaf() {
+            for k in 0..2 {
+                same_tree(x, p.left as usize + k, y, q.left as usize + k);
+            }
+        }
+    }
+
+    #[test]
+    fn the_parallel_build_is_the_one_thread_tree() {
+        let tris = scattered(3 * PARALLEL_SPLIT);
+        let faces: Vec<u32> = (0..tris.len() as u32).collect();
+        let bvh = Bvh::build(tris.clone(), faces);
+        // The one-thread build of the whole: what `build` did before its top split.
+        let centroids: Vec<[f64; 3]> = tris
+            .iter()
+            .map(|t| scale(add(add(t[0], t[1]), t[2]), 1.0 / 3.0))
+            .collect();
+        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+        let one_thread = sequential_subtree(&tris, &centroids, &mut order, 0);
+        assert_eq!(bvh.faces, order);
+        assert_eq!(bvh.nodes.len(), one_thread.len());
+        same_tree(&bvh.nodes, 0, &one_thread, 0);
+        // Every node's box holds its triangles, and its children split its range.
+        for node in &bvh.nodes {
+            for t in &bvh.tris[node.start as usize..node.end as usize] {
+                for c in t {
+                    assert!((0..3).all(|k| node.lo[k] <= c[k] && c[k] <= node.hi[k]));
+                }
+            }
+            if node.is_leaf() {
+                assert!((node.end - node.start) as usize <= LEAF_SIZE);
+            } else {
+                let (l, r) = (
+                    bvh.nodes[node.left as usize],
+                    bvh.nodes[node.left as usize + 1],
+                );
+                assert_eq!((l.start, l.end, r.end), (node.start, r.start, node.end));
+            }
+        }
+    }
 }

@@ -8,6 +8,8 @@
 //! of its faces' normals weighted by their angles there. It costs nothing beyond the
 //! closest point, where the winding number sums over the whole surface near it.
 
+use rayon::prelude::*;
+
 use super::bvh::Bvh;
 use crate::geom::{add, dot, norm, scale, sub};
 use crate::mesh::{SurfaceMesh, Topology};
@@ -40,10 +42,10 @@ impl Pseudonormals {
             let l = norm(n);
             (l > 0.0 && l.is_finite()).then(|| scale(n, 1.0 / l))
         };
-        let mut face_normals = Vec::with_capacity(mesh.triangles.len());
-        for f in 0..mesh.triangles.len() {
-            face_normals.push(unit(mesh.face_normal_scaled(f))?);
-        }
+        let face_normals: Vec<[f64; 3]> = (0..mesh.triangles.len())
+            .into_par_iter()
+            .map(|f| unit(mesh.face_normal_scaled(f)))
+            .collect::<Option<_>>()?;
         let mut vertex_normals = vec![[0.0; 3]; mesh.num_vertices()];
         for (f, t) in mesh.triangles.iter().enumerate() {
             let p = t.map(|v| mesh.positions[v as usize]);
@@ -57,23 +59,26 @@ impl Pseudonormals {
                 vertex_normals[v] = add(vertex_normals[v], scale(face_normals[f], angle));
             }
         }
-        let mut normals = Vec::with_capacity(bvh.faces.len());
-        for &f in &bvh.faces {
-            let f = f as usize;
-            let t = mesh.triangles[f];
-            let mut out = [[0.0; 3]; 7];
-            out[0] = face_normals[f];
-            for i in 0..3 {
-                let e = topology.face_edge(f, i)?;
-                let sum = topology
-                    .edge_faces(e)
-                    .iter()
-                    .fold([0.0; 3], |s, &g| add(s, face_normals[g as usize]));
-                out[1 + i] = sum;
-                out[4 + i] = vertex_normals[t[i] as usize];
-            }
-            normals.push(out);
-        }
+        let normals = bvh
+            .faces
+            .par_iter()
+            .map(|&f| {
+                let f = f as usize;
+                let t = mesh.triangles[f];
+                let mut out = [[0.0; 3]; 7];
+                out[0] = face_normals[f];
+                for i in 0..3 {
+                    let e = topology.face_edge(f, i)?;
+                    let sum = topology
+                        .edge_faces(e)
+                        .iter()
+                        .fold([0.0; 3], |s, &g| add(s, face_normals[g as usize]));
+                    out[1 + i] = sum;
+                    out[4 + i] = vertex_normals[t[i] as usize];
+                }
+                Some(out)
+            })
+            .collect::<Option<Vec<_>>>()?;
         Some(Pseudonormals { normals })
     }
 

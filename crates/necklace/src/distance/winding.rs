@@ -58,19 +58,22 @@ pub(super) struct Expansion {
 
 /// The expansion of every node of `bvh`, indexed like `bvh.nodes`.
 pub(super) fn expansions(bvh: &Bvh) -> Vec<Expansion> {
+    use rayon::prelude::*;
     // Per-triangle area vector (a_t n_t) and centroid, in tree order.
     let area_vec: Vec<[f64; 3]> = bvh
         .tris
-        .iter()
+        .par_iter()
         .map(|[a, b, c]| scale(cross(sub(*b, *a), sub(*c, *a)), 0.5))
         .collect();
     let centroid: Vec<[f64; 3]> = bvh
         .tris
-        .iter()
+        .par_iter()
         .map(|[a, b, c]| scale(add(add(*a, *b), *c), 1.0 / 3.0))
         .collect();
+    // Each node's sums over its own range, in triangle order: the same whatever the
+    // thread count.
     bvh.nodes
-        .iter()
+        .par_iter()
         .map(|node| {
             let range = node.start as usize..node.end as usize;
             let mut dipole = [0.0; 3];

@@ -11,7 +11,9 @@
 //! On a surface, [`volume_mesh`] (`surface`) is the whole stage: the topology the
 //! surface predicts (`prediction`), thickness and gaps measured into sizing features
 //! and creases to snap onto (`surface_sizing`), then meshing (below) and refining
-//! until the mesh's topology is the surface's.
+//! until the mesh's topology is the surface's. The measures do not depend on the side:
+//! [`survey_surface`] makes them once and [`volume_mesh_surveyed`] meshes a side from
+//! them (the pipeline meshes both sides from one survey).
 //!
 //! Steps (Labelle & Shewchuk, "Isosurface Stuffing", SIGGRAPH 2007):
 //! 1. `octree`: a balanced octree whose cells have size `h` wherever the boundary may

@@ -6,7 +6,9 @@
 //! mesher, is the alternative behind the `tetgen` feature (`volume::tetgen`).
 //!
 //! Topology comes first: necks are read off the volume mesh, so an extra tunnel through
-//! a thin wall or a lost thin part is an extra or missing neck. [`volume_mesh`]:
+//! a thin wall or a lost thin part is an extra or missing neck. [`volume_mesh`] (steps
+//! 1–3 are the same for both sides: [`survey_surface`] makes them once, and
+//! [`volume_mesh_surveyed`] does step 4 for one side):
 //! 1. predicts the topology ([`expected_topology`]): per component of the inside (or of
 //!    the shell) its χ and the χ of each boundary surface, from the surface's
 //!    components, their genus and how they nest;
