@@ -203,15 +203,22 @@ impl SurfaceDistance {
     /// triangles: distance +∞, point NaN, face [`Closest::NO_FACE`]; for a NaN query the
     /// distance is NaN too.
     pub fn closest_point(&self, p: [f64; 3]) -> Closest {
+        self.closest_point_within(p, f64::INFINITY)
+    }
+
+    /// [`closest_point`](Self::closest_point) among the triangles closer than `limit`
+    /// (the same answer when the closest is closer; otherwise distance +∞, point NaN,
+    /// face [`Closest::NO_FACE`]), pruning everything farther.
+    pub fn closest_point_within(&self, p: [f64; 3], limit: f64) -> Closest {
         let none = |distance| Closest {
             point: [f64::NAN; 3],
             distance,
             face: Closest::NO_FACE,
         };
-        if p.iter().any(|c| c.is_nan()) {
+        if p.iter().any(|c| c.is_nan()) || limit.is_nan() {
             return none(f64::NAN);
         }
-        match self.bvh.nearest(p) {
+        match self.bvh.nearest_within(p, limit * limit) {
             Some((t, point, d2)) => Closest {
                 point,
                 distance: d2.sqrt(),

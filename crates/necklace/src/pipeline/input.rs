@@ -29,7 +29,8 @@ use crate::geom::{norm, sub};
 use crate::io;
 use crate::loops::Seed;
 use crate::mesh::{
-    orient_consistently, remove_unreferenced, MeshReport, Side, SurfaceMesh, MAX_COORDINATE,
+    orient_consistently, remove_unreferenced, MeshReport, Reorientation, Side, SurfaceMesh,
+    MAX_COORDINATE,
 };
 use crate::tet::{TetMesh, VertexKind};
 
@@ -136,9 +137,15 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
         ));
     }
 
-    // 2. Faces that disagree with their neighbours.
-    let (consistent, turned) = orient_consistently(&mesh);
-    mesh = consistent;
+    // 2. Faces that disagree with their neighbours (none where every edge of a
+    //    manifold without degenerate faces is used once each way: no walk needed).
+    let turned = if plain.manifold && plain.oriented && plain.degenerate_faces == 0 {
+        Reorientation::default()
+    } else {
+        let (consistent, turned) = orient_consistently(&mesh);
+        mesh = consistent;
+        turned
+    };
     if turned.flipped_faces > 0 {
         notes.push(format!(
             "turned {} faces round to agree with their neighbours ({} component{})",

@@ -129,7 +129,8 @@ fn medial_radius(
     let mut across = f64::INFINITY;
     for _ in 0..MEDIAL_STEPS {
         let c = add(q, scale(d, r));
-        let x = distance.closest_point(c);
+        // Only a surface point inside the ball shrinks it.
+        let x = distance.closest_point_within(c, r);
         if x.distance.is_nan() || x.distance >= r * (1.0 - 1e-9) {
             break;
         }
