@@ -580,25 +580,32 @@ fn narrowest(
 ) -> Candidate {
     let (n, normals) = cutting_normals(seed, options);
     let step = options.slide_step * surface.bbox_diagonal();
-    let mut best = c;
-    let start = best.offset;
-    for j in 1..=options.slide_steps {
-        for offset in [start + j as f64 * step, start - j as f64 * step] {
+    let start = c.offset;
+    let offsets: Vec<f64> = (1..=options.slide_steps)
+        .flat_map(|j| [start + j as f64 * step, start - j as f64 * step])
+        .collect();
+    // Each plane's loop on its own (in parallel: a dense surface makes every cut and
+    // tightening long), then the shortest in the order above.
+    let loops: Vec<Option<Tightened>> = offsets
+        .par_iter()
+        .map(|&offset| {
             let point = add(seed.position, scale(n, offset));
-            let Some((_, curve)) = around_point(surface, topology, &normals, point).0 else {
-                continue;
-            };
+            let (_, curve) = around_point(surface, topology, &normals, point).0?;
             let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
-            let Ok(t) = tightened(t) else { continue };
-            // Shorter beyond round-off: the same geodesic reached again does not move it.
-            if t.length < best.tightened.length * (1.0 - 1e-6) {
-                let mut other = measures.candidate(t, offset, Initial::Plane);
-                if other.class == best.class {
-                    other.flatness = best
-                        .flatness
-                        .map(|f| f * other.tightened.length / best.tightened.length);
-                    best = other;
-                }
+            tightened(t).ok()
+        })
+        .collect();
+    let mut best = c;
+    for (offset, t) in offsets.into_iter().zip(loops) {
+        let Some(t) = t else { continue };
+        // Shorter beyond round-off: the same geodesic reached again does not move it.
+        if t.length < best.tightened.length * (1.0 - 1e-6) {
+            let mut other = measures.candidate(t, offset, Initial::Plane);
+            if other.class == best.class {
+                other.flatness = best
+                    .flatness
+                    .map(|f| f * other.tightened.length / best.tightened.length);
+                best = other;
             }
         }
     }
