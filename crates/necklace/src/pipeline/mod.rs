@@ -216,8 +216,9 @@ pub fn find_necks_with_progress(
     Ok(report)
 }
 
-/// One side of the method on a prepared surface: steps 2–6 of [`find_necks`]. `None` when `stop` was
-/// raised (the other side failed) before one of its stages.
+/// One side of the method on a prepared surface, meshed from the run's `survey`: steps
+/// 2–6 of [`find_necks`]. `None` when `stop` was raised (the other side failed) before
+/// one of its stages.
 fn find_side(
     prepared: &PreparedSurface,
     survey: &SurfaceSurvey,
