@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand};
 use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Preconditioner, Schedule, SolverOptions};
+use necklace::simplify::SimplifyOptions;
 use necklace::volume::{Mesher, VolumeOptions};
 
 #[derive(Parser)]
@@ -97,6 +98,14 @@ pub enum Command {
         /// both (the boot: 1.24 GB instead of 1.86 GB).
         #[arg(long)]
         one_side_at_a_time: bool,
+        /// Simplify a surface with more triangles than this (0: never) for the volume
+        /// mesh, distance field and saddles; the loops are cut again with the same
+        /// planes and tightened on the input.
+        #[arg(long, default_value_t = SimplifyOptions::default().above, value_name = "TRIANGLES")]
+        simplify_above: usize,
+        /// How many triangles the simplified copy keeps.
+        #[arg(long, default_value_t = SimplifyOptions::default().target, value_name = "TRIANGLES")]
+        simplify_to: usize,
         #[command(flatten)]
         method: MethodArgs,
         /// Where the plane through a saddle has no curve around it: parallel planes tried

@@ -18,6 +18,7 @@ use necklace::output::OutputOptions;
 use necklace::pipeline::{self};
 use necklace::render::RenderOptions;
 use necklace::shapes::Shape;
+use necklace::simplify::SimplifyOptions;
 use necklace::volume::VolumeOptions;
 use necklace::Side;
 use necklace::{io, MeshReport};
@@ -120,6 +121,8 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             handles,
             tunnels,
             one_side_at_a_time,
+            simplify_above,
+            simplify_to,
             method,
             plane_offsets,
             slide_steps,
@@ -145,6 +148,11 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
                 morse: method.morse(),
                 keep_volume: volume,
                 sides_at_once: !one_side_at_a_time,
+                simplify: SimplifyOptions {
+                    above: simplify_above,
+                    target: simplify_to,
+                    ..SimplifyOptions::default()
+                },
             };
             let files = OutputOptions {
                 picture: png.then(RenderOptions::default),

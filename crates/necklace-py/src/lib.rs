@@ -22,6 +22,7 @@ use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Preconditioner, Schedule, SolverOptions};
 use necklace::pipeline::{NeckOptions, NeckReport, TrackedPoint};
 use necklace::progress::Progress;
+use necklace::simplify::SimplifyOptions;
 use necklace::volume::VolumeOptions;
 use necklace::SurfaceMesh;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
@@ -117,8 +118,14 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
         Some(value) if !value.is_none() => Some(option::<f64>(options, "h", 0.0)?),
         _ => None,
     };
+    let simplify = SimplifyOptions::default();
     Ok(NeckOptions {
         handles: option(options, "handles", true)?,
+        simplify: SimplifyOptions {
+            above: option(options, "simplify_above", simplify.above)?,
+            target: option(options, "simplify_to", simplify.target)?,
+            ..simplify
+        },
         tunnels: option(options, "tunnels", true)?,
         volume: VolumeOptions {
             h,

@@ -65,6 +65,7 @@ pub mod pipeline;
 pub mod progress;
 pub mod render;
 pub mod shapes;
+pub mod simplify;
 pub mod tet;
 pub mod volume;
 

@@ -41,10 +41,14 @@ pub mod membrane;
 pub mod opening;
 mod report;
 mod selection;
+mod surface;
+mod transfer;
 
 pub use report::{DropReason, DroppedLoop, LoopResult, LoopTimings, NeckLoop, TighteningReport};
 pub use selection::{best_fit_normal, centroid};
-use selection::{one_per_neck, select};
+use selection::{neck_loop, one_per_neck, select};
+pub use surface::LoopSurface;
+pub use transfer::transfer_loops;
 pub mod tighten;
 
 use std::sync::OnceLock;
@@ -236,17 +240,10 @@ pub fn find_loops_with_progress(
     check_inputs(surface, seeds, options)?;
 
     let start = Instant::now();
-    let topology = Topology::new(surface);
-    let geometry = SurfaceGeometry::new(surface, &topology);
-    let basis = HomologyBasis::new(surface, &topology);
-    let openings = Openings::new(surface, &topology, &geometry);
-    let measures = Measures {
-        surface,
-        topology: &topology,
-        basis: &basis,
-        openings: &openings,
-        reach: options.opening_reach,
-    };
+    let prepared = LoopSurface::new(surface);
+    let (topology, basis) = (&prepared.topology, &prepared.basis);
+    let geometry = prepared.geometry();
+    let measures = prepared.measures(options);
     let distance = LazyDistance {
         surface,
         given: distance,
@@ -259,7 +256,7 @@ pub fn find_loops_with_progress(
     let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
         .par_iter()
         .map(|seed| {
-            let outcome = loop_from_seed(surface, &topology, &geometry, &distance, seed, options)
+            let outcome = loop_from_seed(surface, topology, &geometry, &distance, seed, options)
                 .map(|s| {
                     let mut c = measures.candidate(s.tightened, s.offset, s.initial);
                     c.sources = s.sources;
@@ -301,7 +298,7 @@ pub fn find_loops_with_progress(
         .map(|(i, c)| {
             let c = if seeds[i].role == Some(Role::CycleClosing) {
                 narrowest(
-                    surface, &topology, &geometry, &measures, &seeds[i], c, options,
+                    surface, topology, &geometry, &measures, &seeds[i], c, options,
                 )
             } else {
                 c

@@ -205,6 +205,15 @@ pub enum DropReason {
         /// Its length.
         length: f64,
     },
+    /// Found on a simplified copy of the surface (`length` there), but the same plane
+    /// (or membrane) gave no tightened loop on the surface itself: no curve around the
+    /// saddle (`tightening` `None`), or tightening ended so.
+    NotTransferred {
+        /// Its length on the simplified surface.
+        length: f64,
+        /// How tightening on the surface itself ended, when there was a curve.
+        tightening: Option<TightenStatus>,
+    },
     /// A duplicate of a kept loop.
     Duplicate {
         /// Index of the kept loop in `loops`.
@@ -264,6 +273,13 @@ impl std::fmt::Display for DropReason {
             DropReason::SameLobe { of, length } => {
                 write!(f, "cuts off the same lobe as seed {of} (length {length:.5})")
             }
+            DropReason::NotTransferred { length, tightening } => write!(
+                f,
+                "found on the simplified surface (length {length:.5}) but not on the surface itself: {}",
+                tightening.map_or("no curve of its plane goes around the saddle".to_string(), |t| {
+                    format!("tightening there ended {t:?}")
+                })
+            ),
             DropReason::NotANeck {
                 bulge,
                 opening,

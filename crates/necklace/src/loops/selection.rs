@@ -156,20 +156,9 @@ pub(super) fn select(
     let diagonal = surface.bbox_diagonal();
     let mut loops: Vec<NeckLoop> = Vec::new();
     for (i, c) in candidates {
-        let Candidate {
-            tightened: t,
-            offset,
-            initial,
-            sources,
-            class,
-            areas,
-            opening,
-            flatness,
-        } = c;
-        let membrane =
-            membrane::spanning_disk(seeds[i].position, seeds[i].normal, &sources, &t.points);
+        let t = &c.tightened;
         let center = centroid(&t.points);
-        let homology = class_string(&class, basis_len);
+        let homology = class_string(&c.class, basis_len);
         let radius = t.length / (2.0 * std::f64::consts::PI);
         let duplicate_of = loops.iter().position(|l| {
             let close = norm(sub(l.center, center)) <= options.merge_distance * diagonal
@@ -196,52 +185,68 @@ pub(super) fn select(
             ));
             continue;
         }
-        let seed = seeds[i];
-        let how = match t.status {
-            TightenStatus::Converged => "a closed geodesic",
-            _ => "a loop whose last round no longer shortened it",
-        };
-        let reason = format!(
-            "saddle persistence {}; tightened in {} rounds from {:.6} to {:.6}, {}; shorter than {} x diagonal",
-            seed.persistence, t.rounds, t.initial_length, t.length, how, options.max_length
-        );
-        loops.push(NeckLoop {
-            kind,
-            normal: best_fit_normal(&t.points, center),
-            center,
-            radius: t.length / (2.0 * std::f64::consts::PI),
-            saddle: seed.position,
-            seed: i,
-            persistence: seed.persistence,
-            duplicates: Vec::new(),
-            role: seed.role,
-            birth_scale: seed.scales.0,
-            death_scale: seed.scales.1,
-            bulge: seed.bulge,
-            separating: class.iter().all(|w| *w == 0),
-            homology,
-            areas,
-            opening,
-            flatness,
-            reason,
-            tightening: TighteningReport {
-                status: t.status,
-                rounds: t.rounds,
-                updates: t.updates,
-                max_edge_turn: t.max_edge_turn,
-                min_vertex_angle: t.min_vertex_angle,
-                simple: t.simple,
-            },
-            length: t.length,
-            initial_length: t.initial_length,
-            initial,
-            membrane,
-            plane_offset: offset,
-            points: t.points,
-            surface_points: t.surface_points,
-        });
+        loops.push(neck_loop(kind, &seeds[i], i, c, options, basis_len));
     }
     loops
+}
+
+/// The kept loop of seed `i` from its candidate; `basis_len` is the number of basis
+/// cycles its class is written with.
+pub(super) fn neck_loop(
+    kind: Side,
+    seed: &Seed,
+    i: usize,
+    c: Candidate,
+    options: &LoopOptions,
+    basis_len: usize,
+) -> NeckLoop {
+    let t = c.tightened;
+    let membrane = membrane::spanning_disk(seed.position, seed.normal, &c.sources, &t.points);
+    let homology = class_string(&c.class, basis_len);
+    let how = match t.status {
+        TightenStatus::Converged => "a closed geodesic",
+        _ => "a loop whose last round no longer shortened it",
+    };
+    let reason = format!(
+        "saddle persistence {}; tightened in {} rounds from {:.6} to {:.6}, {}; shorter than {} x diagonal",
+        seed.persistence, t.rounds, t.initial_length, t.length, how, options.max_length
+    );
+    let center = centroid(&t.points);
+    NeckLoop {
+        kind,
+        normal: best_fit_normal(&t.points, center),
+        center,
+        radius: t.length / (2.0 * std::f64::consts::PI),
+        saddle: seed.position,
+        seed: i,
+        persistence: seed.persistence,
+        duplicates: Vec::new(),
+        role: seed.role,
+        birth_scale: seed.scales.0,
+        death_scale: seed.scales.1,
+        bulge: seed.bulge,
+        separating: c.class.iter().all(|w| *w == 0),
+        homology,
+        areas: c.areas,
+        opening: c.opening,
+        flatness: c.flatness,
+        reason,
+        tightening: TighteningReport {
+            status: t.status,
+            rounds: t.rounds,
+            updates: t.updates,
+            max_edge_turn: t.max_edge_turn,
+            min_vertex_angle: t.min_vertex_angle,
+            simple: t.simple,
+        },
+        length: t.length,
+        initial_length: t.initial_length,
+        initial: c.initial,
+        membrane,
+        plane_offset: c.offset,
+        points: t.points,
+        surface_points: t.surface_points,
+    }
 }
 
 /// Whether every point of `a` lies within `tolerance` of the closed polyline `b`.

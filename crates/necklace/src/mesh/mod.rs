@@ -22,6 +22,8 @@
 //! - The signed volume (divergence theorem) is positive for an outward-oriented closed mesh.
 
 mod csr;
+#[cfg(test)]
+pub(crate) mod fixtures;
 mod homology;
 mod repair;
 mod report;

@@ -144,30 +144,9 @@ fn uses_directed(t: [u32; 3], a: u32, b: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::fixtures::octahedron;
     use crate::mesh::MeshReport;
 
-    /// An octahedron, outward.
-    fn octahedron() -> SurfaceMesh {
-        let positions = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let triangles = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        SurfaceMesh::new(positions, triangles).unwrap()
-    }
 
     #[test]
     fn unreferenced_vertices_go_and_faces_follow() {

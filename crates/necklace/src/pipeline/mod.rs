@@ -31,16 +31,19 @@
 mod critical;
 mod input;
 mod report;
+mod working;
 
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, Result};
-use crate::loops::{self, LoopOptions, NeckLoop, Role, Seed};
+use crate::loops::{self, LoopOptions, LoopSurface, NeckLoop, Role, Seed};
 use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule};
 use crate::progress::{Lane, Progress, Silent};
+use crate::simplify::SimplifyOptions;
 use crate::tet::{TetMesh, VertexKind};
 use crate::volume::{survey_surface, volume_mesh_surveyed, SurfaceSurvey, VolumeOptions};
 
@@ -54,9 +57,10 @@ pub use input::{
 };
 use report::SideRun;
 pub use report::{
-    tracked_points, HomologyCheck, MorseCheck, NeckReport, NeckTimings, SideReport, StageTimings,
-    TrackedPoint, VolumeField,
+    tracked_points, HomologyCheck, MorseCheck, NeckReport, NeckTimings, SideReport, SimplifyReport,
+    StageTimings, TrackedPoint, VolumeField,
 };
+use working::simplified_input;
 
 /// The distance field of the method (paper sec. 3): the exact distance from every
 /// vertex of `mesh` to the surface of `distance`, 0 on surface-kind vertices.
@@ -95,6 +99,9 @@ pub struct NeckOptions {
     /// after the other, with the larger side's peak memory instead of both sides'.
     /// The results are the same.
     pub sides_at_once: bool,
+    /// When a dense surface is simplified for the volume, field and saddles (the loops
+    /// are cut again and tightened on the input; `simplify`).
+    pub simplify: SimplifyOptions,
 }
 
 impl Default for NeckOptions {
@@ -107,6 +114,7 @@ impl Default for NeckOptions {
             loops: LoopOptions::default(),
             keep_volume: false,
             sides_at_once: true,
+            simplify: SimplifyOptions::default(),
         }
     }
 }
@@ -165,13 +173,33 @@ pub fn find_necks_with_progress(
     let prepared = prepare_input(surface.clone())?;
     let mut report = NeckReport::new(&prepared);
     report.timings.input = clock.lap();
+    // 1b. A dense surface: a simplified copy for the stages that need only its shape
+    //     (the loops are cut again and tightened on the input).
+    progress.start("simplification", 0);
+    let working = simplified_input(&prepared, &options.simplify);
+    progress.finish();
+    let working = working?;
+    if let Some(w) = &working {
+        report.notes.extend(w.notes.iter().cloned());
+        report.warnings.extend(w.warnings.iter().cloned());
+        report.simplified = w.report;
+    }
+    let work = working
+        .as_ref()
+        .and_then(|w| w.prepared.as_ref())
+        .unwrap_or(&prepared);
+    let carry = (!std::ptr::eq(work, &prepared)).then(|| Carry {
+        prepared: &prepared,
+        surface: OnceLock::new(),
+    });
+    report.timings.simplify = clock.lap();
     // 2a. What the volume stage measures on the surface: the same for both sides, so
     //     measured once (on a dense surface most of the volume stage).
     progress.start("surface survey", 0);
     let survey = survey_surface(
-        &prepared.mesh,
-        &prepared.distance,
-        &prepared.mesh_report,
+        &work.mesh,
+        &work.distance,
+        &work.mesh_report,
         &options.volume,
     );
     progress.finish();
@@ -188,7 +216,15 @@ pub fn find_necks_with_progress(
             lane,
             label: side.name(),
         };
-        let found = find_side(&prepared, &survey, side, options, &progress, &failed);
+        let found = find_side(
+            work,
+            carry.as_ref(),
+            &survey,
+            side,
+            options,
+            &progress,
+            &failed,
+        );
         if found.is_err() {
             failed.store(true, Ordering::Relaxed);
         }
@@ -216,11 +252,20 @@ pub fn find_necks_with_progress(
     Ok(report)
 }
 
+/// The input surface, when the method runs on a simplified copy of it: the loops found
+/// on the copy are carried back to it (`loops::transfer_loops`), with what the loop
+/// stage needs of it built once for both sides.
+struct Carry<'a> {
+    prepared: &'a PreparedSurface,
+    surface: OnceLock<LoopSurface<'a>>,
+}
+
 /// One side of the method on a prepared surface, meshed from the run's `survey`: steps
-/// 2–6 of [`find_necks`]. `None` when `stop` was raised (the other side failed) before
-/// one of its stages.
+/// 2–6 of [`find_necks`]; with `carry`, the loops carried back to the input. `None`
+/// when `stop` was raised (the other side failed) before one of its stages.
 fn find_side(
     prepared: &PreparedSurface,
+    carry: Option<&Carry>,
     survey: &SurfaceSurvey,
     side: Side,
     options: &NeckOptions,
@@ -286,6 +331,15 @@ fn find_side(
     } else {
         let distance = Some(&prepared.distance);
         loops::find_loops_with_progress(surface, distance, &seeds, side, &loop_options, progress)?
+    };
+    // On a simplified copy: the same planes cut the input, and the loops are tightened
+    // there.
+    let found = match carry {
+        Some(c) => {
+            let to = c.surface.get_or_init(|| LoopSurface::new(&c.prepared.mesh));
+            loops::transfer_loops(to, &c.prepared.distance, &seeds, found, &loop_options)
+        }
+        None => found,
     };
 
     // 6. The Morse and homology checks.

@@ -9,6 +9,7 @@ use super::PreparedSurface;
 use crate::loops::{DropReason, DroppedLoop, NeckLoop, SurfacePoint};
 use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::{self, MorseResult, VertexType};
+use crate::simplify::Stop;
 use crate::tet::TetMesh;
 use crate::volume::VolumeReport;
 
@@ -165,6 +166,10 @@ pub struct NeckReport {
     /// (unreferenced vertices removed, faces oriented); not in the JSON.
     #[serde(skip)]
     pub surface: SurfaceMesh,
+    /// When the input was dense enough to be simplified: what simplification did, and
+    /// whether the volume, field and saddle stages worked on the copy.
+    #[serde(default)]
+    pub simplified: Option<SimplifyReport>,
     /// What the caller should know, one line each: what is unusual about the input
     /// (open, crossing itself, ...), each side's volume warnings (a topology that
     /// differs from the surface's, a budget that bound, ...).
@@ -187,9 +192,28 @@ pub struct NeckTimings {
     pub tunnels: Option<StageTimings>,
     /// Sum over the sides run.
     pub total: StageTimings,
-    /// The whole run's wall clock: `input` + `survey` + `total.total` when the sides
+    /// Simplifying a dense surface (`simplified`), 0 when it was not.
+    #[serde(default)]
+    pub simplify: f64,
+    /// The whole run's wall clock: `input` + `simplify` + `survey` + `total.total` when the sides
     /// run one after the other, less when they run at the same time.
     pub seconds: f64,
+}
+
+/// What simplifying a dense input did (`simplify`; [`NeckReport::simplified`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SimplifyReport {
+    /// Triangles of the input and of the simplified copy.
+    pub triangles: [usize; 2],
+    /// The largest error of a collapse made, in the surface's units (the root of the
+    /// summed squared distances to the input planes it replaced).
+    pub max_error: f64,
+    /// What stopped the simplification: the target, the error bound, or no collapse
+    /// left that keeps the topology.
+    pub stop: Stop,
+    /// Whether the copy was used (false: it crossed itself or lost a handle; the
+    /// warnings say which, and every stage worked on the input).
+    pub used: bool,
 }
 
 /// What one side of [`find_necks`](super::find_necks) found, before it joins the report.
@@ -214,6 +238,7 @@ impl NeckReport {
             notes: prepared.notes.clone(),
             surface: prepared.mesh.clone(),
             warnings: prepared.warnings.clone(),
+            simplified: None,
         }
     }
 

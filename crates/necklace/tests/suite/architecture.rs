@@ -18,7 +18,9 @@ const DATA: &[&str] = &["error", "file", "geom", "mesh", "tet", "progress"];
 const SERVICES: &[&str] = &["distance"];
 /// Modules that may import everything; no other module imports them.
 const COMPOSERS: &[&str] = &["pipeline", "output"];
-const STAGES: &[&str] = &["io", "shapes", "volume", "morse", "loops", "render"];
+const STAGES: &[&str] = &[
+    "io", "shapes", "simplify", "volume", "morse", "loops", "render",
+];
 
 /// Third-party crates and the modules that may name them, with their submodules
 /// (`None`: any).

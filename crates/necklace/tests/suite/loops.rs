@@ -214,7 +214,7 @@ impl TighteningDiagnostics for NeckLoop {
     }
 }
 
-fn check_loop(mesh: &SurfaceMesh, topology: &Topology, l: &NeckLoop) {
+pub(crate) fn check_loop(mesh: &SurfaceMesh, topology: &Topology, l: &NeckLoop) {
     check_geodesic(
         mesh,
         topology,

@@ -15,6 +15,7 @@ mod morse;
 mod render;
 mod shapes;
 mod shared_meshes;
+mod simplify;
 mod tet_io;
 mod tetgen;
 mod volume;

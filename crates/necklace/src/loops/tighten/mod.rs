@@ -167,6 +167,20 @@ impl<'a> SurfaceGeometry<'a> {
         }
     }
 
+    /// The same, with the total angles already computed (`total_angles` of an earlier
+    /// one on the same mesh).
+    pub fn with_angles(
+        mesh: &'a SurfaceMesh,
+        topology: &'a Topology,
+        total_angle: Vec<f64>,
+    ) -> Self {
+        SurfaceGeometry {
+            mesh,
+            topology,
+            total_angle,
+        }
+    }
+
     /// The sum of the face angles at each vertex.
     pub fn total_angles(&self) -> &[f64] {
         &self.total_angle
