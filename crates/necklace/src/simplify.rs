@@ -160,15 +160,15 @@ pub fn simplify(surface: &SurfaceMesh, options: &SimplifyOptions) -> Result<Simp
             if c.error > threshold || changed[a as usize] || changed[b as usize] {
                 continue;
             }
-            let Some(shared) = state.link_condition(a, b) else {
+            if !state.link_condition(a, b) {
                 refused.0 += 1;
                 continue;
-            };
+            }
             if !state.keeps_triangles(a, b, c.target) {
                 refused.1 += 1;
                 continue;
             }
-            state.collapse(a, b, shared, c.target);
+            state.collapse(a, b, c.target);
             changed[a as usize] = true;
             changed[b as usize] = true;
             faces -= 2;
@@ -297,7 +297,6 @@ struct Collapser {
 impl Collapser {
     fn new(surface: &SurfaceMesh) -> Collapser {
         let n = surface.num_vertices();
-        let mut quadrics = vec![Quadric::default(); n];
         let incidence = Csr::new(
             n,
             surface
@@ -306,22 +305,35 @@ impl Collapser {
                 .enumerate()
                 .flat_map(|(f, t)| t.iter().map(move |&v| (v, f as u32))),
         );
-        for (f, t) in surface.triangles.iter().enumerate() {
-            let normal = surface.face_normal_scaled(f);
-            let length = norm(normal);
-            if length == 0.0 {
-                continue;
-            }
-            let n = scale(normal, 1.0 / length);
-            let q = Quadric::plane(n, -dot(n, surface.positions[t[0] as usize]));
-            for &v in t {
-                quadrics[v as usize] = quadrics[v as usize].add(&q);
-            }
-        }
+        // Each face's plane (none for a degenerate face), then each vertex's sum over
+        // its faces in face order.
+        let planes: Vec<Option<Quadric>> = (0..surface.num_triangles())
+            .into_par_iter()
+            .map(|f| {
+                let normal = surface.face_normal_scaled(f);
+                let length = norm(normal);
+                (length > 0.0).then(|| {
+                    let n = scale(normal, 1.0 / length);
+                    let p = surface.positions[surface.triangles[f][0] as usize];
+                    Quadric::plane(n, -dot(n, p))
+                })
+            })
+            .collect();
+        let (vertex_faces, quadrics) = (0..n)
+            .into_par_iter()
+            .map(|v| {
+                let faces = incidence.get(v);
+                let q = faces
+                    .iter()
+                    .filter_map(|&f| planes[f as usize])
+                    .fold(Quadric::default(), |q, p| q.add(&p));
+                (faces.to_vec(), q)
+            })
+            .unzip();
         Collapser {
             positions: surface.positions.clone(),
             faces: surface.triangles.iter().map(|&t| Some(t)).collect(),
-            vertex_faces: (0..n).map(|v| incidence.get(v).to_vec()).collect(),
+            vertex_faces,
             quadrics,
             stamps: vec![0; n],
             stamp: 0,
@@ -370,10 +382,10 @@ impl Collapser {
         }
     }
 
-    /// The two vertices opposite the edge `a b` when collapsing it keeps the surface a
-    /// manifold of the same topology: `a` and `b` share exactly those neighbours, and
-    /// each of them keeps at least three.
-    fn link_condition(&mut self, a: u32, b: u32) -> Option<[u32; 2]> {
+    /// Whether collapsing the edge `a b` keeps the surface a manifold of the same
+    /// topology: `a` and `b` share exactly the two vertices opposite the edge as
+    /// neighbours, and each of those keeps at least three.
+    fn link_condition(&mut self, a: u32, b: u32) -> bool {
         // Stamp the neighbours of `a`, then count those of `b` among them.
         self.stamp += 1;
         let stamp = self.stamp;
@@ -390,7 +402,7 @@ impl Collapser {
                 if u != a && u != b && self.stamps[u as usize] == stamp {
                     self.stamps[u as usize] = stamp - 1;
                     if count == 2 {
-                        return None;
+                        return false;
                     }
                     shared[count] = u;
                     count += 1;
@@ -398,7 +410,7 @@ impl Collapser {
             }
         }
         if count < 2 {
-            return None;
+            return false;
         }
         let [c, d] = shared;
         let opposite = |v: u32| {
@@ -408,7 +420,7 @@ impl Collapser {
             })
         };
         let roomy = |v: u32| self.vertex_faces[v as usize].len() > 3;
-        (opposite(c) && opposite(d) && roomy(c) && roomy(d)).then_some([c, d])
+        opposite(c) && opposite(d) && roomy(c) && roomy(d)
     }
 
     /// Whether moving `a` and `b` to `target` keeps every remaining triangle around
@@ -441,8 +453,8 @@ impl Collapser {
         })
     }
 
-    /// Merge `a` into `b` at `target`; `shared` are the vertices opposite the edge.
-    fn collapse(&mut self, a: u32, b: u32, shared: [u32; 2], target: Position) {
+    /// Merge `a` into `b` at `target`.
+    fn collapse(&mut self, a: u32, b: u32, target: Position) {
         let mut moved = std::mem::take(&mut self.vertex_faces[a as usize]);
         let mut gone = [u32::MAX; 2];
         moved.retain(|&f| {
@@ -454,11 +466,15 @@ impl Collapser {
                 true
             }
         });
-        for f in gone {
+        // The two faces on the edge leave their corners' lists (`b` and the opposite
+        // vertices on a manifold; whatever they are on other input).
+        for f in gone.into_iter().filter(|&f| f != u32::MAX) {
+            for v in self.face(f) {
+                if v != a {
+                    self.vertex_faces[v as usize].retain(|g| *g != f);
+                }
+            }
             self.faces[f as usize] = None;
-        }
-        for v in [b, shared[0], shared[1]] {
-            self.vertex_faces[v as usize].retain(|f| !gone.contains(f));
         }
         for &f in &moved {
             let t = self.faces[f as usize].as_mut().expect("a live face");

@@ -77,7 +77,9 @@ impl Closest {
 #[derive(Clone)]
 pub struct SurfaceDistance {
     bvh: Bvh,
-    expansions: Vec<Expansion>,
+    /// The fast winding number's far-field expansions (`None`: built without them,
+    /// [`SurfaceDistance::without_winding`]; winding numbers are then exact).
+    expansions: Option<Vec<Expansion>>,
     /// The sign from the closest point, when enabled (see
     /// [`SurfaceDistance::use_pseudonormal_sign`]).
     pseudonormals: Option<std::sync::Arc<Pseudonormals>>,
@@ -102,6 +104,17 @@ impl SurfaceDistance {
     /// Build the BVH over the triangles of `mesh` and the winding-number expansions.
     /// Triangles with an out-of-range index or a non-finite corner are left out.
     pub fn new(mesh: &SurfaceMesh) -> Self {
+        let mut distance = SurfaceDistance::without_winding(mesh);
+        distance.add_winding();
+        distance
+    }
+
+    /// [`SurfaceDistance::new`] without the winding number's expansions: distances,
+    /// closest points, rays and crossings for the cost of the tree alone, for a surface
+    /// whose inside is asked about elsewhere (a dense surface the pipeline simplifies:
+    /// the stages that need signs work on the copy). Winding numbers and signs are
+    /// exact, `O(triangles)` per query, until [`add_winding`](Self::add_winding).
+    pub fn without_winding(mesh: &SurfaceMesh) -> Self {
         let n = mesh.positions.len();
         let mut tris = Vec::with_capacity(mesh.triangles.len());
         let mut faces = Vec::with_capacity(mesh.triangles.len());
@@ -120,13 +133,19 @@ impl SurfaceDistance {
             .nodes
             .first()
             .map_or(0.0, |root| norm(sub(root.hi, root.lo)));
-        let expansions = winding::expansions(&bvh);
         SurfaceDistance {
             bvh,
-            expansions,
+            expansions: None,
             pseudonormals: None,
             scale,
             crossings: None,
+        }
+    }
+
+    /// Build the fast winding number's expansions, where they are missing.
+    pub fn add_winding(&mut self) {
+        if self.expansions.is_none() {
+            self.expansions = Some(winding::expansions(&self.bvh));
         }
     }
 
@@ -144,10 +163,17 @@ impl SurfaceDistance {
     /// Record `crossings`, the [`SurfaceDistance::self_intersections`] of `mesh` (the
     /// mesh this was built from), and without any take the sign from the
     /// pseudonormals, as [`SurfaceDistance::of_surface`] does.
-    pub fn with_crossings(mut self, mesh: &SurfaceMesh, crossings: Vec<[u32; 2]>) -> Self {
-        if crossings.is_empty() {
-            self.use_pseudonormal_sign(mesh);
+    pub fn with_crossings(self, mesh: &SurfaceMesh, crossings: Vec<[u32; 2]>) -> Self {
+        let mut distance = self.recording(crossings);
+        if distance.crossings().is_some_and(|c| c.is_empty()) {
+            distance.use_pseudonormal_sign(mesh);
         }
+        distance
+    }
+
+    /// Record `crossings`, the [`SurfaceDistance::self_intersections`] of the mesh this
+    /// was built from, without changing how signs are taken.
+    pub fn recording(mut self, crossings: Vec<[u32; 2]>) -> Self {
         self.crossings = Some(std::sync::Arc::new(crossings));
         self
     }
@@ -231,12 +257,16 @@ impl SurfaceDistance {
     /// Generalized winding number at `p` by the fast hierarchical approximation
     /// (Barill et al. 2018, third-order expansions, β = [`BETA`]): typically within a few
     /// 10⁻³ of [`winding_number_exact`](Self::winding_number_exact) away from the surface
-    /// (exact on it: near triangles are always summed exactly).
+    /// (exact on it: near triangles are always summed exactly); exact throughout when
+    /// built [`without_winding`](Self::without_winding).
     /// 0 for an infinite query, NaN for a NaN one.
     pub fn winding_number(&self, p: [f64; 3]) -> f64 {
         match check_query(p) {
             Some(w) => w,
-            None => winding::fast(&self.bvh, &self.expansions, p),
+            None => match &self.expansions {
+                Some(expansions) => winding::fast(&self.bvh, expansions, p),
+                None => winding::exact(&self.bvh, p),
+            },
         }
     }
 

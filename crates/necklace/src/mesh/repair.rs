@@ -147,7 +147,6 @@ mod tests {
     use crate::mesh::fixtures::octahedron;
     use crate::mesh::MeshReport;
 
-
     #[test]
     fn unreferenced_vertices_go_and_faces_follow() {
         let mut mesh = octahedron();

@@ -69,7 +69,18 @@ pub struct PreparedSurface {
 /// (`inward_components`, and `outward` judged by it) and the number of crossing
 /// triangle pairs (`self_intersections`).
 pub fn inspect_surface(mesh: &SurfaceMesh) -> MeshReport {
-    inspect(mesh).report
+    inspect(mesh, Signs::Now).report
+}
+
+/// Whether the prepared surface's distance structure answers inside/outside at once.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Signs {
+    /// Fast winding number, and the pseudonormal sign where the surface allows it.
+    Now,
+    /// Only where the surface has several components (their nesting needs winding
+    /// numbers); otherwise exact winding numbers until [`add_signs`] (a dense surface
+    /// about to be simplified: the stages that ask signs work on the copy).
+    Later,
 }
 
 /// What [`inspect`] finds.
@@ -86,7 +97,7 @@ struct Inspection {
 
 /// [`inspect_surface`], with the plain report, the crossing pairs of triangles and the
 /// distance structure that found them.
-fn inspect(mesh: &SurfaceMesh) -> Inspection {
+fn inspect(mesh: &SurfaceMesh, signs: Signs) -> Inspection {
     let plain = MeshReport::new(mesh);
     let mut report = plain.clone();
     if mesh.triangles.is_empty() || report.max_abs_coordinate > MAX_COORDINATE {
@@ -97,7 +108,10 @@ fn inspect(mesh: &SurfaceMesh) -> Inspection {
             distance: None,
         };
     }
-    let distance = SurfaceDistance::new(mesh);
+    let mut distance = SurfaceDistance::without_winding(mesh);
+    if signs == Signs::Now || plain.components > 1 {
+        distance.add_winding();
+    }
     let crossings = distance.self_intersections(&mesh.triangles);
     report.self_intersections = Some(crossings.len());
     if report.outward.is_some() && crossings.is_empty() {
@@ -118,12 +132,17 @@ fn inspect(mesh: &SurfaceMesh) -> Inspection {
 /// Check a mesh, repair what has one right answer and say what was done (see the
 /// module doc). Open, non-manifold or self-crossing input is accepted with warnings.
 pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
+    prepare(input, Signs::Now)
+}
+
+/// [`prepare_input`], its distance structure with or without signs.
+pub(super) fn prepare(input: SurfaceMesh, signs: Signs) -> Result<PreparedSurface> {
     let Inspection {
         report,
         plain,
         crossings,
         distance,
-    } = inspect(&input);
+    } = inspect(&input, signs);
     refuse_unusable(&report)?;
     let mut notes = Vec::new();
     let mut warnings = Vec::new();
@@ -223,6 +242,7 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
     // The run's distance structure: the one that inspected the input when nothing was
     // changed, else one of the repaired mesh.
     let distance = match distance {
+        Some(d) if mesh == input && signs == Signs::Later => d.recording(crossings),
         Some(d) if mesh == input => d.with_crossings(&mesh, crossings),
         _ => SurfaceDistance::of_surface(&mesh),
     };
@@ -237,6 +257,15 @@ pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
         notes,
         warnings,
     })
+}
+
+/// Give a surface prepared with [`Signs::Later`] the signs [`prepare_input`] gives:
+/// the fast winding number, and the pseudonormal sign where it does not cross itself.
+pub(super) fn add_signs(prepared: &mut PreparedSurface) {
+    prepared.distance.add_winding();
+    if prepared.crossing_faces.is_empty() {
+        prepared.distance.use_pseudonormal_sign(&prepared.mesh);
+    }
 }
 
 /// Check that `mesh` is a closed, manifold surface and [`prepare_input`] it. An error

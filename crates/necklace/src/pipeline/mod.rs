@@ -60,7 +60,7 @@ pub use report::{
     tracked_points, HomologyCheck, MorseCheck, NeckReport, NeckTimings, SideReport, SimplifyReport,
     StageTimings, TrackedPoint, VolumeField,
 };
-use working::simplified_input;
+use working::prepare_run;
 
 /// The distance field of the method (paper sec. 3): the exact distance from every
 /// vertex of `mesh` to the surface of `distance`, 0 on surface-kind vertices.
@@ -170,20 +170,25 @@ pub fn find_necks_with_progress(
     let mut clock = Stopwatch::start();
     // 1. The input, once: repaired, oriented, its problems said, its distance
     //    structure built for every stage of the run.
-    let prepared = prepare_input(surface.clone())?;
-    let mut report = NeckReport::new(&prepared);
-    report.timings.input = clock.lap();
     // 1b. A dense surface: a simplified copy for the stages that need only its shape
-    //     (the loops are cut again and tightened on the input).
-    progress.start("simplification", 0);
-    let working = simplified_input(&prepared, &options.simplify);
-    progress.finish();
-    let working = working?;
+    //     (the loops are cut again and tightened on the input), made at the same time.
+    let dense = options.simplify.applies_to(surface.num_triangles());
+    if dense {
+        progress.start("input and simplification", 0);
+    }
+    let run = prepare_run(surface, &options.simplify);
+    if dense {
+        progress.finish();
+    }
+    let (prepared, working) = run?;
+    let mut report = NeckReport::new(&prepared);
     if let Some(w) = &working {
         report.notes.extend(w.notes.iter().cloned());
         report.warnings.extend(w.warnings.iter().cloned());
         report.simplified = w.report;
+        report.timings.simplify = w.seconds;
     }
+    report.timings.input = clock.lap();
     let work = working
         .as_ref()
         .and_then(|w| w.prepared.as_ref())
@@ -192,7 +197,6 @@ pub fn find_necks_with_progress(
         prepared: &prepared,
         surface: OnceLock::new(),
     });
-    report.timings.simplify = clock.lap();
     // 2a. What the volume stage measures on the surface: the same for both sides, so
     //     measured once (on a dense surface most of the volume stage).
     progress.start("surface survey", 0);

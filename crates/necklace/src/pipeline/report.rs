@@ -192,10 +192,11 @@ pub struct NeckTimings {
     pub tunnels: Option<StageTimings>,
     /// Sum over the sides run.
     pub total: StageTimings,
-    /// Simplifying a dense surface (`simplified`), 0 when it was not.
+    /// Simplifying a dense surface (`simplified`), 0 when it was not. It runs at the
+    /// same time as the input step, so it is part of `input`'s wall clock.
     #[serde(default)]
     pub simplify: f64,
-    /// The whole run's wall clock: `input` + `simplify` + `survey` + `total.total` when the sides
+    /// The whole run's wall clock: `input` + `survey` + `total.total` when the sides
     /// run one after the other, less when they run at the same time.
     pub seconds: f64,
 }

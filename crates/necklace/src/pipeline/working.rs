@@ -1,14 +1,15 @@
-//! Step 1b of the method: the surface the volume, field and saddle stages work on.
+//! Steps 1 and 1b of the method: the input prepared, and the surface the volume,
+//! field and saddle stages work on.
 //! A surface denser than [`SimplifyOptions::above`] triangles is simplified
 //! (`simplify`, the paper's sec. 5 speed-up) when it is a closed manifold that does not
 //! cross itself, and the copy is used when it is one too, with the input's genus on
 //! every component; otherwise the input is used and a warning says why. The loops
 //! found on the copy are carried back to the input by `loops::transfer_loops`.
 
-use super::input::{prepare_input, PreparedSurface};
+use super::input::{add_signs, prepare, prepare_input, PreparedSurface, Signs};
 use super::report::SimplifyReport;
 use crate::error::Result;
-use crate::mesh::MeshReport;
+use crate::mesh::{MeshReport, SurfaceMesh};
 use crate::simplify::{simplify, SimplifyOptions, Stop};
 
 /// The simplified copy of a dense input, and what to say about it.
@@ -19,23 +20,41 @@ pub(super) struct Working {
     pub report: Option<SimplifyReport>,
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
+    /// Seconds spent simplifying (at the same time as the input step).
+    pub seconds: f64,
 }
 
-/// The working surface of a run on `prepared` (see the module doc); `None` when the
-/// input is not dense enough to be simplified.
-pub(super) fn simplified_input(
-    prepared: &PreparedSurface,
+/// Step 1 of a run, with step 1b: the input prepared (`prepare_input`) and, where it
+/// is dense enough, its simplified copy (see the module doc). Simplification starts at
+/// the same time as the input step, on the input as given (the input step's checks take
+/// as long, and simplifying is mostly one sequential pass); it is done again on the
+/// prepared surface in the rare case that preparing changed the input (faces turned,
+/// vertices removed). The input's distance structure gets its signs only where the
+/// stages work on the input after all. Returns the prepared input, and the copy with
+/// what to say about it (`None`: not dense enough to simplify).
+pub(super) fn prepare_run(
+    input: &SurfaceMesh,
     options: &SimplifyOptions,
-) -> Result<Option<Working>> {
-    let triangles = prepared.mesh.num_triangles();
+) -> Result<(PreparedSurface, Option<Working>)> {
+    let triangles = input.num_triangles();
     if !options.applies_to(triangles) {
-        return Ok(None);
+        return Ok((prepare_input(input.clone())?, None));
     }
+    let (prepared, early) = rayon::join(
+        || prepare(input.clone(), Signs::Later),
+        || {
+            let start = std::time::Instant::now();
+            (simplify(input, options), start.elapsed().as_secs_f64())
+        },
+    );
+    let (early, mut seconds) = early;
+    let mut prepared = prepared?;
     let mut working = Working {
         prepared: None,
         report: None,
         notes: Vec::new(),
         warnings: Vec::new(),
+        seconds,
     };
     let r = &prepared.mesh_report;
     if !(r.watertight && r.manifold && r.oriented && prepared.crossing_faces.is_empty()) {
@@ -43,12 +62,20 @@ pub(super) fn simplified_input(
             "not simplified ({triangles} triangles, above {}): only a closed manifold surface that does not cross itself is; every stage works on the input",
             options.above
         ));
-        return Ok(Some(working));
+        add_signs(&mut prepared);
+        return Ok((prepared, Some(working)));
     }
-    let simplified = simplify(&prepared.mesh, options)?;
+    let simplified = if prepared.mesh == *input {
+        early?
+    } else {
+        let start = std::time::Instant::now();
+        let again = simplify(&prepared.mesh, options)?;
+        seconds += start.elapsed().as_secs_f64();
+        again
+    };
     let diagonal = prepared.mesh.bbox_diagonal();
     let copy = prepare_input(simplified.mesh)?;
-    let same_genus = genera(&copy.mesh_report) == genera(r);
+    let same_genus = genera(&copy.mesh_report) == genera(&prepared.mesh_report);
     let used = same_genus && copy.crossing_faces.is_empty();
     let (before, after) = simplified.triangles;
     let stop = match simplified.stop {
@@ -74,6 +101,7 @@ pub(super) fn simplified_input(
                 "has another genus".to_string()
             }
         ));
+        add_signs(&mut prepared);
     }
     working.report = Some(SimplifyReport {
         triangles: [before, after],
@@ -82,7 +110,8 @@ pub(super) fn simplified_input(
         used,
     });
     working.prepared = used.then_some(copy);
-    Ok(Some(working))
+    working.seconds = seconds;
+    Ok((prepared, Some(working)))
 }
 
 /// Each component's genus, in order.
