@@ -242,8 +242,8 @@ pub fn find_loops_with_progress(
     let start = Instant::now();
     let prepared = LoopSurface::new(surface);
     let (topology, basis) = (&prepared.topology, &prepared.basis);
-    let geometry = prepared.geometry();
-    let measures = prepared.measures(options);
+    let geometry = prepared.geometry(surface);
+    let measures = prepared.measures(surface, options);
     let distance = LazyDistance {
         surface,
         given: distance,

@@ -12,8 +12,9 @@ use crate::mesh::{HomologyBasis, SurfaceMesh, Topology};
 /// and angle defects. Built once per surface ([`LoopSurface::new`]); the pipeline
 /// builds one for the input surface when loops found on a simplified copy are carried
 /// back to it ([`transfer_loops`](super::transfer_loops)).
-pub struct LoopSurface<'a> {
-    pub(super) surface: &'a SurfaceMesh,
+/// It does not hold the surface: each use names it again, and must name the same one
+/// ([`LoopSurface::is_of`]).
+pub struct LoopSurface {
     pub(super) topology: Topology,
     pub(super) basis: HomologyBasis,
     openings: Openings,
@@ -21,16 +22,21 @@ pub struct LoopSurface<'a> {
     angles: Vec<f64>,
 }
 
-impl<'a> LoopSurface<'a> {
+impl LoopSurface {
     /// Topology, homology basis and openings of `surface`. `O(V + F)`.
-    pub fn new(surface: &'a SurfaceMesh) -> Self {
+    pub fn new(surface: &SurfaceMesh) -> Self {
         let topology = Topology::new(surface);
-        let geometry = SurfaceGeometry::new(surface, &topology);
-        let basis = HomologyBasis::new(surface, &topology);
-        let openings = Openings::new(surface, &topology, &geometry);
-        let angles = geometry.total_angles().to_vec();
+        // The homology basis beside the angles and openings (each a pass over a
+        // dense surface).
+        let (basis, (openings, angles)) = rayon::join(
+            || HomologyBasis::new(surface, &topology),
+            || {
+                let geometry = SurfaceGeometry::new(surface, &topology);
+                let openings = Openings::new(surface, &topology, &geometry);
+                (openings, geometry.total_angles().to_vec())
+            },
+        );
         LoopSurface {
-            surface,
             topology,
             basis,
             openings,
@@ -38,14 +44,25 @@ impl<'a> LoopSurface<'a> {
         }
     }
 
-    /// What tightening needs of the surface.
-    pub(super) fn geometry(&self) -> SurfaceGeometry<'_> {
-        SurfaceGeometry::with_angles(self.surface, &self.topology, self.angles.clone())
+    /// Whether this was built from `surface` (as far as its sizes tell).
+    pub fn is_of(&self, surface: &SurfaceMesh) -> bool {
+        self.angles.len() == surface.num_vertices()
+            && self.topology.num_faces() == surface.num_triangles()
     }
 
-    pub(super) fn measures(&self, options: &LoopOptions) -> Measures<'_> {
+    /// What tightening needs of `surface`, the surface this was built from.
+    pub(super) fn geometry<'a>(&'a self, surface: &'a SurfaceMesh) -> SurfaceGeometry<'a> {
+        SurfaceGeometry::with_angles(surface, &self.topology, self.angles.clone())
+    }
+
+    /// What loops on `surface`, the surface this was built from, are measured with.
+    pub(super) fn measures<'a>(
+        &'a self,
+        surface: &'a SurfaceMesh,
+        options: &LoopOptions,
+    ) -> Measures<'a> {
         Measures {
-            surface: self.surface,
+            surface,
             topology: &self.topology,
             basis: &self.basis,
             openings: &self.openings,

@@ -22,22 +22,37 @@ use super::{
 };
 use super::{DropReason, DroppedLoop, NeckLoop};
 use crate::distance::SurfaceDistance;
+use crate::error::{Error, Result};
 use crate::geom::{add, scale};
+use crate::mesh::SurfaceMesh;
 
-/// `found`, the loop stage's result for `seeds` on a simplified copy of `to`'s
-/// surface, carried back to that surface (see the module doc). Dropped seeds stay
-/// dropped; kept loops keep their order, seeds and duplicates.
+/// `found`, the loop stage's result for `seeds` on a simplified copy of `surface`,
+/// carried back to `surface` (see the module doc); `to` and `distance` are built from
+/// `surface`. Dropped seeds stay dropped; kept loops keep their order, seeds and
+/// duplicates.
 pub fn transfer_loops(
+    surface: &SurfaceMesh,
     to: &LoopSurface,
     distance: &SurfaceDistance,
     seeds: &[Seed],
     found: LoopResult,
     options: &LoopOptions,
-) -> LoopResult {
-    let surface = to.surface;
-    let geometry = to.geometry();
-    let measures = to.measures(options);
-    let carried: Vec<Result<NeckLoop, DropReason>> = found
+) -> Result<LoopResult> {
+    if !to.is_of(surface) || distance.num_triangles() != surface.num_triangles() {
+        return Err(Error::invalid_argument(
+            "transfer_loops: the loop surface and distance structure must be built from the surface the loops are carried to",
+        ));
+    }
+    if let Some(l) = found.loops.iter().find(|l| l.seed >= seeds.len()) {
+        return Err(Error::invalid_argument(format!(
+            "transfer_loops: a loop names seed {} of {}",
+            l.seed,
+            seeds.len()
+        )));
+    }
+    let geometry = to.geometry(surface);
+    let measures = to.measures(surface, options);
+    let carried: Vec<std::result::Result<NeckLoop, DropReason>> = found
         .loops
         .par_iter()
         .map(|l| {
@@ -127,9 +142,9 @@ pub fn transfer_loops(
         }
     }
     dropped.sort_by_key(|d| d.seed);
-    LoopResult {
+    Ok(LoopResult {
         loops,
         dropped,
         timings: found.timings,
-    }
+    })
 }

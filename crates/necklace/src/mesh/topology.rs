@@ -94,6 +94,11 @@ impl Topology {
         }
     }
 
+    /// Number of faces.
+    pub fn num_faces(&self) -> usize {
+        self.face_edges.len()
+    }
+
     /// Number of unique undirected edges.
     pub fn num_edges(&self) -> usize {
         self.edges.len()

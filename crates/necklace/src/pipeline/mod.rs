@@ -189,14 +189,14 @@ pub fn find_necks_with_progress(
         report.timings.simplify = w.seconds;
     }
     report.timings.input = clock.lap();
-    let work = working
-        .as_ref()
-        .and_then(|w| w.prepared.as_ref())
-        .unwrap_or(&prepared);
-    let carry = (!std::ptr::eq(work, &prepared)).then(|| Carry {
-        prepared: &prepared,
-        surface: OnceLock::new(),
+    let carry = working.as_ref().and_then(|w| {
+        Some(Carry {
+            copy: w.prepared.as_ref()?,
+            prepared: &prepared,
+            surface: OnceLock::new(),
+        })
     });
+    let work = carry.as_ref().map_or(&prepared, |c| c.copy);
     // 2a. What the volume stage measures on the surface: the same for both sides, so
     //     measured once (on a dense surface most of the volume stage).
     progress.start("surface survey", 0);
@@ -260,8 +260,12 @@ pub fn find_necks_with_progress(
 /// on the copy are carried back to it (`loops::transfer_loops`), with what the loop
 /// stage needs of it built once for both sides.
 struct Carry<'a> {
+    /// The simplified copy the stages work on.
+    copy: &'a PreparedSurface,
+    /// The input.
     prepared: &'a PreparedSurface,
-    surface: OnceLock<LoopSurface<'a>>,
+    /// What the loop stage needs of the input, built by the first side to need it.
+    surface: OnceLock<LoopSurface>,
 }
 
 /// One side of the method on a prepared surface, meshed from the run's `survey`: steps
@@ -340,8 +344,10 @@ fn find_side(
     // there.
     let found = match carry {
         Some(c) => {
-            let to = c.surface.get_or_init(|| LoopSurface::new(&c.prepared.mesh));
-            loops::transfer_loops(to, &c.prepared.distance, &seeds, found, &loop_options)
+            let input = &c.prepared;
+            let to = c.surface.get_or_init(|| LoopSurface::new(&input.mesh));
+            let distance = &input.distance;
+            loops::transfer_loops(&input.mesh, to, distance, &seeds, found, &loop_options)?
         }
         None => found,
     };
