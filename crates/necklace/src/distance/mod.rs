@@ -419,11 +419,39 @@ impl SurfaceDistance {
 /// along a segment longer than this fraction of the bounding-box diagonal.
 pub const CROSSING_TOLERANCE: f64 = 1e-9;
 
+/// Triangles whose corners lie within this fraction of their size of each other's
+/// planes are coplanar for [`crossing_segment`].
+pub const COPLANAR_TOLERANCE: f64 = 1e-9;
+
 /// The segment where two crossing triangles meet: each one's part in the other's plane,
-/// overlapped along the planes' common line. `None` for coplanar or separate triangles.
+/// overlapped along the planes' common line. `None` for separate triangles and for
+/// coplanar ones, also where they are coplanar only up to rounding (each one's corners
+/// within [`COPLANAR_TOLERANCE`] × the pair's extent of the other's plane, plus the
+/// rounding of their coordinates): there the planes' common line is noise, and the
+/// pieces of one triangle split at its edge midpoints would be seen crossing.
 pub fn crossing_segment(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> Option<[[f64; 3]; 2]> {
     let normal = |t: &[[f64; 3]; 3]| cross(sub(t[1], t[0]), sub(t[2], t[0]));
     let (na, nb) = (normal(&a), normal(&b));
+    let longest = a
+        .iter()
+        .chain(&b)
+        .flat_map(|p| a.iter().chain(&b).map(move |q| norm(sub(*p, *q))))
+        .fold(0.0, f64::max);
+    let magnitude = a
+        .iter()
+        .chain(&b)
+        .flatten()
+        .fold(0.0f64, |m, c| m.max(c.abs()));
+    let slab = COPLANAR_TOLERANCE * longest + 1e-14 * magnitude;
+    let within = |t: &[[f64; 3]; 3], n: [f64; 3], origin: [f64; 3]| {
+        let length = norm(n);
+        length > 0.0
+            && t.iter()
+                .all(|p| dot(n, sub(*p, origin)).abs() <= slab * length)
+    };
+    if within(&a, nb, b[0]) && within(&b, na, a[0]) {
+        return None;
+    }
     // The part of triangle t in the plane through `origin` with normal n.
     let in_plane = |t: &[[f64; 3]; 3], n: [f64; 3], origin: [f64; 3]| {
         let d = t.map(|p| dot(n, sub(p, origin)));
@@ -484,6 +512,36 @@ mod tests {
             ],
             triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
         }
+    }
+
+    /// The pieces of one thin triangle (the fertility's face 6185) split three times at
+    /// its edge midpoints lie in its plane only up to rounding; none crosses another.
+    #[test]
+    fn the_pieces_of_one_triangle_do_not_cross() {
+        let mut pieces = vec![[
+            [-4.19335, -64.8618, 26.9076],
+            [-11.7365, -67.5856, 26.271],
+            [-13.4595, -68.1812, 22.5577],
+        ]];
+        let mid = |p: [f64; 3], q: [f64; 3]| scale(add(p, q), 0.5);
+        for _ in 0..3 {
+            pieces = pieces
+                .iter()
+                .flat_map(|&[a, b, c]| {
+                    let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+                    [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+                })
+                .collect();
+        }
+        for (i, p) in pieces.iter().enumerate() {
+            for q in &pieces[i + 1..] {
+                assert_eq!(crossing_segment(*p, *q), None, "{p:?} {q:?}");
+            }
+        }
+        // A real crossing is still one.
+        let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let b = [[0.2, 0.2, -0.5], [0.2, 0.2, 0.5], [0.9, 0.9, 0.0]];
+        assert!(crossing_segment(a, b).is_some());
     }
 
     #[test]

@@ -452,7 +452,7 @@ fn neighbours(topology: &Topology, f: u32) -> impl Iterator<Item = u32> + '_ {
     })
 }
 
-fn shared_edge(topology: &Topology, f: u32, g: u32) -> Option<u32> {
+pub(super) fn shared_edge(topology: &Topology, f: u32, g: u32) -> Option<u32> {
     (0..3)
         .filter_map(|i| topology.face_edge(f as usize, i))
         .find(|&e| topology.edge_faces(e).contains(&g))
@@ -464,7 +464,7 @@ fn shared_edge(topology: &Topology, f: u32, g: u32) -> Option<u32> {
 /// with the straight distance to `b`'s centroid, which never overestimates (and is
 /// consistent: a step's length bounds the change of the distance), so the path is a
 /// shortest one and only faces towards `b` are searched.
-fn dual_path(
+pub(super) fn dual_path(
     surface: &SurfaceMesh,
     topology: &Topology,
     a: u32,
@@ -514,7 +514,7 @@ fn dual_path(
 
 /// The cyclic face sequence without steps that go straight back (… f g f … → … f …)
 /// and without a face repeated next to itself.
-fn without_backtracking(cycle: Vec<u32>) -> Vec<u32> {
+pub(super) fn without_backtracking(cycle: Vec<u32>) -> Vec<u32> {
     let mut stack: Vec<u32> = Vec::with_capacity(cycle.len());
     for f in cycle {
         if stack.last() == Some(&f) {

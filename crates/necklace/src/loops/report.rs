@@ -205,13 +205,16 @@ pub enum DropReason {
         /// Its length.
         length: f64,
     },
-    /// Found on a simplified copy of the surface (`length` there), but the same plane
-    /// (or membrane) gave no tightened loop on the surface itself: no curve around the
-    /// saddle (`tightening` `None`), or tightening ended so.
+    /// Found on a simplified copy of the surface (`length` there), but neither its plane
+    /// (or membrane) nor its best-fit plane gave it again on the surface itself: no
+    /// curve around the point (`tightening` `None`), tightening ended so, or it gave
+    /// another loop (`other`: its length).
     NotTransferred {
         /// Its length on the simplified surface.
         length: f64,
-        /// How tightening on the surface itself ended, when there was a curve.
+        /// The length of a loop found instead that is not the same neck.
+        other: Option<f64>,
+        /// How the last tightening on the surface itself ended, when there was a curve.
         tightening: Option<TightenStatus>,
     },
     /// A duplicate of a kept loop.
@@ -273,12 +276,18 @@ impl std::fmt::Display for DropReason {
             DropReason::SameLobe { of, length } => {
                 write!(f, "cuts off the same lobe as seed {of} (length {length:.5})")
             }
-            DropReason::NotTransferred { length, tightening } => write!(
+            DropReason::NotTransferred {
+                length,
+                other,
+                tightening,
+            } => write!(
                 f,
                 "found on the simplified surface (length {length:.5}) but not on the surface itself: {}",
-                tightening.map_or("no curve of its plane goes around the saddle".to_string(), |t| {
-                    format!("tightening there ended {t:?}")
-                })
+                match (other, tightening) {
+                    (Some(other), _) => format!("its planes gave another loop (length {other:.5})"),
+                    (None, Some(t)) => format!("tightening there ended {t:?}"),
+                    (None, None) => "no curve of its planes goes around it".to_string(),
+                }
             ),
             DropReason::NotANeck {
                 bulge,

@@ -15,16 +15,83 @@
 
 use rayon::prelude::*;
 
+use super::cut::Crossing;
+use super::membrane::{dual_path, shared_edge, without_backtracking};
 use super::tighten::tighten;
 use super::{
-    around_point, cutting_normals, membrane_loop, neck_loop, tightened, Initial, LoopOptions,
-    LoopResult, LoopSurface, Seed,
+    around_point, centroid, cutting_normals, membrane_loop, neck_loop, tightened, Initial,
+    LoopOptions, LoopResult, LoopSurface, Seed,
 };
 use super::{DropReason, DroppedLoop, NeckLoop};
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, Result};
-use crate::geom::{add, scale};
-use crate::mesh::SurfaceMesh;
+use crate::geom::{add, norm, scale, sub};
+use crate::mesh::{SurfaceMesh, Topology};
+
+/// A loop carried back may be longer or shorter than the copy's by this fraction.
+pub const SAME_LENGTH: f64 = 0.05;
+
+/// ... and its centre this many of the copy loop's radii away from the copy's.
+pub const SAME_CENTER: f64 = 0.5;
+
+/// How a loop is rebuilt on the surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Way {
+    /// As on the copy: the same plane, or the saddle's membrane.
+    Same,
+    /// The faces under the copy's loop, joined by shortest face paths.
+    Traced,
+    /// The best-fit plane of the copy's loop.
+    LoopPlane,
+}
+
+/// The strip of faces of `surface` under the closed polyline `points` (a loop on a copy
+/// of it): each point's closest face, consecutive ones joined by shortest face paths,
+/// steps straight back removed; with the edges it crosses (at their midpoints), as the
+/// tightening takes an initial loop. `None` where two faces are not joined within the
+/// membrane's search limit or the strip closes on itself.
+fn traced(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    distance: &SurfaceDistance,
+    points: &[[f64; 3]],
+    options: &LoopOptions,
+) -> Option<(Vec<Crossing>, Vec<u32>)> {
+    let mut faces: Vec<u32> = points
+        .iter()
+        .map(|&p| distance.closest_point(p).face)
+        .collect();
+    faces.dedup();
+    if faces.first() == faces.last() && faces.len() > 1 {
+        faces.pop();
+    }
+    let mut cycle = Vec::new();
+    for (i, &f) in faces.iter().enumerate() {
+        let g = faces[(i + 1) % faces.len()];
+        let path = dual_path(surface, topology, f, g, options.membrane.max_settled)?;
+        cycle.extend_from_slice(&path[..path.len() - 1]);
+    }
+    let cycle = without_backtracking(cycle);
+    let mut seen = cycle.clone();
+    seen.sort_unstable();
+    seen.dedup();
+    if cycle.len() < 3 || seen.len() < cycle.len() {
+        return None;
+    }
+    let crossings = (0..cycle.len())
+        .map(|i| {
+            let prev = cycle[(i + cycle.len() - 1) % cycle.len()];
+            shared_edge(topology, prev, cycle[i]).map(|edge| Crossing { edge, t: 0.5 })
+        })
+        .collect::<Option<Vec<_>>>()?;
+    Some((crossings, cycle))
+}
+
+/// Whether a loop (`points`, `length`) is the neck of the copy's loop `l`.
+fn same_neck(points: &[[f64; 3]], length: f64, l: &NeckLoop) -> bool {
+    (length - l.length).abs() <= SAME_LENGTH * l.length
+        && norm(sub(centroid(points), l.center)) <= SAME_CENTER * l.radius
+}
 
 /// `found`, the loop stage's result for `seeds` on a simplified copy of `surface`,
 /// carried back to `surface` (see the module doc); `to` and `distance` are built from
@@ -58,21 +125,16 @@ pub fn transfer_loops(
         .map(|l| {
             let seed = &seeds[l.seed];
             let (n, normals) = cutting_normals(seed, options);
-            let not_transferred = |tightening| DropReason::NotTransferred {
-                length: l.length,
-                tightening,
-            };
-            let (t, sources) = match l.initial {
-                Initial::Plane => {
-                    let point = add(seed.position, scale(n, l.plane_offset));
-                    let (_, curve) = around_point(surface, &to.topology, &normals, point)
-                        .0
-                        .ok_or(not_transferred(None))?;
-                    let t = tighten(&geometry, &curve.crossings, &curve.faces, &options.tighten);
-                    (t, Vec::new())
-                }
-                Initial::Membrane => {
-                    let m = membrane_loop(
+            let (mut status, mut other) = (None, None);
+            for way in [Way::Same, Way::Traced, Way::LoopPlane] {
+                let start = match (way, l.initial) {
+                    (Way::Same, Initial::Plane) => {
+                        let point = add(seed.position, scale(n, l.plane_offset));
+                        around_point(surface, &to.topology, &normals, point)
+                            .0
+                            .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
+                    }
+                    (Way::Same, Initial::Membrane) => membrane_loop(
                         surface,
                         &to.topology,
                         distance,
@@ -80,30 +142,51 @@ pub fn transfer_loops(
                         n,
                         &options.membrane,
                     )
-                    .map_err(|_| not_transferred(None))?;
-                    let t = tighten(&geometry, &m.crossings, &m.faces, &options.tighten);
-                    (t, m.sources)
+                    .ok()
+                    .map(|m| (m.crossings, m.faces, m.sources)),
+                    (Way::Traced, _) => traced(surface, &to.topology, distance, &l.points, options)
+                        .map(|(crossings, faces)| (crossings, faces, Vec::new())),
+                    (Way::LoopPlane, _) => {
+                        around_point(surface, &to.topology, &[l.normal], l.center)
+                            .0
+                            .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
+                    }
+                };
+                let Some((crossings, faces, sources)) = start else {
+                    continue;
+                };
+                let t = tighten(&geometry, &crossings, &faces, &options.tighten);
+                status = Some(t.status);
+                let Ok(t) = tightened(t) else { continue };
+                if !same_neck(&t.points, t.length, l) {
+                    other = Some(t.length);
+                    continue;
                 }
-            };
-            let status = t.status;
-            let t = tightened(t).map_err(|_| not_transferred(Some(status)))?;
-            let mut c = measures.candidate(t, l.plane_offset, l.initial);
-            c.sources = sources;
-            let inscribed = distance.distance(seed.position);
-            c.flatness = (inscribed > 0.0)
-                .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
-            let mut carried = neck_loop(l.kind, seed, l.seed, c, options, to.basis.len());
-            carried.duplicates = l.duplicates.clone();
-            carried.reason = format!(
-                "{}; found on the simplified surface (length {:.6}) and cut again from the same {}",
-                carried.reason,
-                l.length,
-                match l.initial {
-                    Initial::Plane => "plane",
-                    Initial::Membrane => "saddle's membrane",
-                }
-            );
-            Ok(carried)
+                let mut c = measures.candidate(t, l.plane_offset, l.initial);
+                c.sources = sources;
+                let inscribed = distance.distance(seed.position);
+                c.flatness = (inscribed > 0.0)
+                    .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
+                let mut carried = neck_loop(l.kind, seed, l.seed, c, options, to.basis.len());
+                carried.duplicates = l.duplicates.clone();
+                carried.reason = format!(
+                    "{}; found on the simplified surface (length {:.6}) and cut again from {}",
+                    carried.reason,
+                    l.length,
+                    match (way, l.initial) {
+                        (Way::Same, Initial::Plane) => "the same plane",
+                        (Way::Same, Initial::Membrane) => "the saddle's membrane",
+                        (Way::Traced, _) => "the faces under that loop",
+                        (Way::LoopPlane, _) => "the best-fit plane of that loop",
+                    }
+                );
+                return Ok(carried);
+            }
+            Err(DropReason::NotTransferred {
+                length: l.length,
+                other,
+                tightening: status,
+            })
         })
         .collect();
 
