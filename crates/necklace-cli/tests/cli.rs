@@ -356,6 +356,43 @@ fn loops_json_has_the_documented_fields_and_writes_obj_and_json() {
 }
 
 #[test]
+fn loops_simplifies_a_surface_above_the_flag_and_says_so() {
+    let dir = temp_dir("simplify");
+    let mesh = dir.join("dumbbell.obj");
+    let out = necklace(&["shape", "dumbbell", "-o", mesh.to_str().unwrap()]);
+    assert!(out.status.success());
+    let run = |extra: &[&str]| {
+        let mut args = vec!["loops", mesh.to_str().unwrap(), "--handles", "--json"];
+        args.extend_from_slice(extra);
+        let out = necklace(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (json, String::from_utf8_lossy(&out.stderr).to_string())
+    };
+    let (plain, _) = run(&[]);
+    assert!(
+        plain["simplified"].is_null(),
+        "small surfaces are used as they are"
+    );
+    let (simplified, stderr) = run(&["--simplify-above", "1000", "--simplify-to", "2000"]);
+    let report = &simplified["simplified"];
+    assert_eq!(report["used"], true, "{stderr}");
+    let [before, after] = [0, 1].map(|k| report["triangles"][k].as_u64().unwrap());
+    assert!(before > 2000 && after <= before, "{report}");
+    assert!(stderr.contains("simplified from"), "{stderr}");
+    // The same neck, cut again and tightened on the input.
+    let length = |j: &serde_json::Value| j["loops"][0]["length"].as_f64().unwrap();
+    assert_eq!(simplified["loops"].as_array().unwrap().len(), 1);
+    assert!((length(&simplified) - length(&plain)).abs() < 0.005 * length(&plain));
+    let (off, _) = run(&["--simplify-above", "0"]);
+    assert!(off["simplified"].is_null());
+}
+
+#[test]
 fn render_draws_a_mesh_with_its_loops_and_rejects_bad_input() {
     let dir = temp_dir("render");
     let mesh = dir.join("torus.obj");

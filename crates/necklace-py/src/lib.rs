@@ -413,6 +413,8 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("max_flatness", options.loops.max_flatness)?;
     out.set_item("volume", options.keep_volume)?;
     out.set_item("one_side_at_a_time", !options.sides_at_once)?;
+    out.set_item("simplify_above", options.simplify.above)?;
+    out.set_item("simplify_to", options.simplify.target)?;
     Ok(out)
 }
 

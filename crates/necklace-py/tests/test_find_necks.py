@@ -45,6 +45,20 @@ def test_both_preconditioners_give_the_dumbbells_neck(dumbbell):
     assert multigrid.loops[0].length == pytest.approx(jacobi.loops[0].length, rel=1e-6)
 
 
+def test_a_surface_above_simplify_above_is_simplified_as_by_the_cli(cli, dumbbell):
+    v, f = necklace.load_mesh(dumbbell)
+    flags = dict(handles=True, tunnels=False, simplify_above=1000, simplify_to=2000)
+    result = necklace.find_necks(v, f, **flags)
+    report = result.to_dict()
+    assert report["simplified"]["used"]
+    assert any("simplified from" in n for n in result.notes)
+    cli_flags = ("--handles", "--simplify-above", "1000", "--simplify-to", "2000")
+    same_loops(report, cli_report(cli, dumbbell, *cli_flags))
+    plain = necklace.find_necks(v, f, handles=True, tunnels=False)
+    assert plain.to_dict()["simplified"] is None
+    assert result.loops[0].length == pytest.approx(plain.loops[0].length, rel=0.005)
+
+
 def test_kitten_same_loops_as_the_cli(cli, kitten):
     v, f = necklace.load_mesh(kitten)
     result = necklace.find_necks(v, f)

@@ -374,6 +374,8 @@ def find_necks(
     max_flatness: float = 3.0,
     volume: bool = False,
     one_side_at_a_time: bool = False,
+    simplify_above: int = 200_000,
+    simplify_to: int = 30_000,
     progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> NeckResult:
     """Find the neck loops of a closed triangle mesh.
@@ -414,6 +416,11 @@ def find_necks(
         one_side_at_a_time: run the two sides one after the other instead of at
             the same time: slower, with the larger side's peak memory instead of
             both sides'; the same results.
+        simplify_above: a closed surface with more triangles than this (0: never)
+            is simplified for the volume mesh, field and saddles, and each loop is cut
+            again and tightened on the input (``to_dict()["simplified"]`` says what
+            was done; ``notes`` too).
+        simplify_to: how many triangles the simplified copy keeps.
         progress: called as ``progress(stage, done, total)`` at each stage's start
             and end and at most every 0.2 s in between (``total`` 0 when unknown). The
             two sides run at the same time, so their calls interleave; each stage's
@@ -451,6 +458,8 @@ def find_necks(
         max_flatness=max_flatness,
         volume=volume,
         one_side_at_a_time=one_side_at_a_time,
+        simplify_above=simplify_above,
+        simplify_to=simplify_to,
     )
     if progress is not None and not callable(progress):
         raise NecklaceError("progress: not callable")
