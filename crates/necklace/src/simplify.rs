@@ -33,10 +33,10 @@
 //!   whose error exceeds [`SimplifyOptions::max_error`] × diagonal, or when no valid
 //!   collapse is left; [`Simplified::stop`] says which.
 //!
-//! Conventions: closed, manifold, consistently oriented input (the pipeline simplifies
-//! only such surfaces); faces keep their orientation; units are the surface's. The
-//! result is the same for any thread count (one sequential queue, ties broken by vertex
-//! index). Entry point: [`simplify`].
+//! Conventions: closed, manifold, consistently oriented input (the pipeline uses the
+//! copy of no other surface); faces keep their orientation; units are the surface's. The
+//! result is the same for any thread count (each edge priced on its own, the collapses
+//! made in one sequential sweep in face order). Entry point: [`simplify`].
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -112,12 +112,26 @@ pub struct Simplified {
 }
 
 /// A simplified copy of the closed, manifold, oriented `surface` (see the module doc).
+/// Other surfaces are accepted too (only manifold edges collapse), as long as every
+/// triangle names three distinct vertices of the mesh and every coordinate is finite.
 pub fn simplify(surface: &SurfaceMesh, options: &SimplifyOptions) -> Result<Simplified> {
     let bound = options.max_error * surface.bbox_diagonal();
     if !(options.max_error.is_finite() && options.max_error > 0.0) || options.target < 4 {
         return Err(Error::invalid_argument(
             "simplification needs a positive error bound and a target of at least 4 triangles",
         ));
+    }
+    // Any mesh may come here (the pipeline simplifies the input while it is being
+    // checked): indices must be usable; other problems only make a copy not used.
+    crate::mesh::check_finite(&surface.positions)?;
+    let n = surface.num_vertices();
+    let unusable = |t: &[u32; 3]| {
+        t.iter().any(|&v| v as usize >= n) || t[0] == t[1] || t[1] == t[2] || t[2] == t[0]
+    };
+    if let Some(f) = surface.triangles.iter().position(unusable) {
+        return Err(Error::invalid_argument(format!(
+            "simplification needs three distinct vertices of the mesh per triangle; triangle {f} has not"
+        )));
     }
     let mut state = Collapser::new(surface);
     let mut faces = surface.num_triangles();
@@ -395,16 +409,23 @@ impl Collapser {
     }
 
     /// Whether collapsing the edge `a b` keeps the surface a manifold of the same
-    /// topology: `a` and `b` share exactly the two vertices opposite the edge as
-    /// neighbours, and each of those keeps at least three.
+    /// topology: the edge has two triangles, `a` and `b` share exactly the two vertices
+    /// opposite it as neighbours, and each of those keeps at least three.
     fn link_condition(&mut self, a: u32, b: u32) -> bool {
         // Stamp the neighbours of `a`, then count those of `b` among them.
         self.stamp += 1;
         let stamp = self.stamp;
+        let mut on_edge = 0;
         for &f in self.vertex_faces.get(a) {
-            for u in self.faces[f as usize].expect("a live face") {
+            let t = self.faces[f as usize].expect("a live face");
+            on_edge += usize::from(t.contains(&b));
+            for u in t {
                 self.stamps[u as usize] = stamp;
             }
+        }
+        // A manifold edge: exactly two triangles (a collapse removes them).
+        if on_edge != 2 {
+            return false;
         }
         // Each shared neighbour once (its stamp taken back when met).
         let mut shared = [u32::MAX; 2];
@@ -696,6 +717,37 @@ mod tests {
         let one = run(1);
         assert!(one.max_error > 0.0, "curved collapses were made");
         assert_eq!(one, run(3));
+    }
+
+    #[test]
+    fn a_mesh_that_is_not_a_closed_manifold_is_simplified_without_a_panic() {
+        // A triangle given twice (its edges have three triangles and pass the
+        // neighbour test), an edge with three triangles, a bowtie vertex and an open
+        // border, next to a closed part; and a triangle with a repeated vertex is an
+        // error.
+        let mut mesh = split(&split(&octahedron()));
+        let twice: Vec<[u32; 3]> = mesh.triangles.iter().step_by(7).copied().collect();
+        mesh.triangles.extend(twice);
+        let n = mesh.positions.len() as u32;
+        mesh.positions
+            .extend([[3.0, 0.0, 0.0], [3.0, 1.0, 0.0], [3.0, 0.0, 1.0]]);
+        mesh.triangles
+            .extend([[0, 2, n], [0, 2, n + 1], [0, 2, n + 2], [0, n, n + 1]]);
+        let options = SimplifyOptions {
+            target: 4,
+            max_error: 10.0,
+            ..Default::default()
+        };
+        let s = simplify(&mesh, &options).unwrap();
+        assert!(s.triangles.1 < s.triangles.0);
+        assert!(s
+            .mesh
+            .triangles
+            .iter()
+            .flatten()
+            .all(|&v| (v as usize) < s.mesh.num_vertices()));
+        mesh.triangles.push([1, 1, 2]);
+        assert!(simplify(&mesh, &options).is_err());
     }
 
     #[test]

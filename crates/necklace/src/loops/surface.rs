@@ -25,17 +25,13 @@ pub struct LoopSurface {
 impl LoopSurface {
     /// Topology, homology basis and openings of `surface`. `O(V + F)`.
     pub fn new(surface: &SurfaceMesh) -> Self {
+        // One thread: the pipeline builds it lazily for both sides (`OnceLock`), where
+        // nested parallel work could run the other side's call on the waiting thread.
         let topology = Topology::new(surface);
-        // The homology basis beside the angles and openings (each a pass over a
-        // dense surface).
-        let (basis, (openings, angles)) = rayon::join(
-            || HomologyBasis::new(surface, &topology),
-            || {
-                let geometry = SurfaceGeometry::new(surface, &topology);
-                let openings = Openings::new(surface, &topology, &geometry);
-                (openings, geometry.total_angles().to_vec())
-            },
-        );
+        let geometry = SurfaceGeometry::new(surface, &topology);
+        let basis = HomologyBasis::new(surface, &topology);
+        let openings = Openings::new(surface, &topology, &geometry);
+        let angles = geometry.total_angles().to_vec();
         LoopSurface {
             topology,
             basis,
