@@ -8,7 +8,7 @@
 //! fixed-size traversal stacks below. Triangles are stored reordered so that every node,
 //! leaf or not, owns a contiguous range of them.
 
-use crate::geom::{add, closest_on_triangle, cross, dot, norm, scale, sub};
+use crate::geom::{closest_on_triangle, cross, dot, norm, sub};
 
 /// A node splits when it holds more triangles than this (leaves hold 4 to 8).
 pub(super) const LEAF_SIZE: usize = 8;
@@ -95,14 +95,18 @@ impl Bvh {
         if n == 0 {
             return Bvh::default();
         }
-        let centroids: Vec<[f64; 3]> = tris
-            .par_iter()
-            .map(|t| scale(add(add(t[0], t[1]), t[2]), 1.0 / 3.0))
+        // Each triangle's corners and face side by side: the splits move these and
+        // read nothing else, so the build streams through memory.
+        let mut items: Vec<Item> = tris
+            .into_par_iter()
+            .zip(faces)
+            .map(|(corners, face)| Item { corners, face })
             .collect();
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        let nodes = subtree(&tris, &centroids, &mut order, 0);
-        let tris_sorted = order.par_iter().map(|&i| tris[i as usize]).collect();
-        let faces_sorted = order.par_iter().map(|&i| faces[i as usize]).collect();
+        let nodes = subtree(&mut items, 0);
+        let (tris_sorted, faces_sorted) = items
+            .into_par_iter()
+            .map(|it| (it.corners, it.face))
+            .unzip();
         Bvh {
             nodes,
             tris: tris_sorted,
@@ -248,26 +252,42 @@ impl Bvh {
 /// A node holding more triangles than this builds its two halves at the same time.
 const PARALLEL_SPLIT: usize = 1 << 15;
 
-/// The nodes of the subtree over the triangles `order` (indices into `tris` and
-/// `centroids`; the first is number `offset` in tree order), with its root at index 0
-/// and children indexed within the returned nodes. `order` is left in tree order.
-fn subtree(
-    tris: &[[[f64; 3]; 3]],
-    centroids: &[[f64; 3]],
-    order: &mut [u32],
-    offset: usize,
-) -> Vec<Node> {
-    let n = order.len();
-    if n <= PARALLEL_SPLIT {
-        return sequential_subtree(tris, centroids, order, offset);
+/// A triangle while the tree is built: its corners and its mesh face.
+#[derive(Clone, Copy)]
+struct Item {
+    corners: [[f64; 3]; 3],
+    face: u32,
+}
+
+impl Item {
+    fn centroid(&self) -> [f64; 3] {
+        [0, 1, 2].map(|axis| self.centroid_on(axis))
     }
-    let (lo, hi) = bounds(order.iter().flat_map(|&i| tris[i as usize]));
-    let mid = split(centroids, order);
-    let (first, second) = order.split_at_mut(mid);
-    let (left, right) = rayon::join(
-        || subtree(tris, centroids, first, offset),
-        || subtree(tris, centroids, second, offset + mid),
-    );
+
+    /// One coordinate of the centroid (as `scale(add(add(a, b), c), 1 / 3)` computes it).
+    fn centroid_on(&self, axis: usize) -> f64 {
+        let [a, b, c] = self.corners;
+        (a[axis] + b[axis] + c[axis]) * (1.0 / 3.0)
+    }
+}
+
+/// The bounds of some items' corners.
+fn item_bounds(items: &[Item]) -> ([f64; 3], [f64; 3]) {
+    bounds(items.iter().flat_map(|it| it.corners))
+}
+
+/// The nodes of the subtree over `items` (the first is number `offset` in tree order),
+/// with its root at index 0 and children indexed within the returned nodes. `items` is
+/// left in tree order.
+fn subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
+    let n = items.len();
+    if n <= PARALLEL_SPLIT {
+        return sequential_subtree(items, offset);
+    }
+    let (lo, hi) = item_bounds(items);
+    let mid = split(items);
+    let (first, second) = items.split_at_mut(mid);
+    let (left, right) = rayon::join(|| subtree(first, offset), || subtree(second, offset + mid));
     // The root, its two children, the rest of the left subtree, the rest of the right.
     let (nl, nr) = (left.len(), right.len());
     let mut nodes = Vec::with_capacity(1 + nl + nr);
@@ -296,29 +316,24 @@ fn subtree(
 }
 
 /// [`subtree`] on one thread: nodes in the order they are split (depth first).
-fn sequential_subtree(
-    tris: &[[[f64; 3]; 3]],
-    centroids: &[[f64; 3]],
-    order: &mut [u32],
-    offset: usize,
-) -> Vec<Node> {
+fn sequential_subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
     let mut nodes = vec![Node {
         lo: [0.0; 3],
         hi: [0.0; 3],
         left: 0,
         start: 0,
-        end: order.len() as u32,
+        end: items.len() as u32,
     }];
     let mut todo = vec![0usize];
     while let Some(ni) = todo.pop() {
         let (s, e) = (nodes[ni].start as usize, nodes[ni].end as usize);
-        let (lo, hi) = bounds(order[s..e].iter().flat_map(|&i| tris[i as usize]));
+        let (lo, hi) = item_bounds(&items[s..e]);
         nodes[ni].lo = lo;
         nodes[ni].hi = hi;
         if e - s <= LEAF_SIZE {
             continue;
         }
-        let mid = s + split(centroids, &mut order[s..e]);
+        let mid = s + split(&mut items[s..e]);
         let left = nodes.len();
         for (start, end) in [(s, mid), (mid, e)] {
             nodes.push(Node {
@@ -340,10 +355,10 @@ fn sequential_subtree(
     nodes
 }
 
-/// Split `order` (a node's triangles) at the median of their centroids along the
+/// Split `items` (a node's triangles) at the median of their centroids along the
 /// longest axis of the centroid bounds; returns the first index of the second half.
-fn split(centroids: &[[f64; 3]], order: &mut [u32]) -> usize {
-    let (clo, chi) = bounds(order.iter().map(|&i| centroids[i as usize]));
+fn split(items: &mut [Item]) -> usize {
+    let (clo, chi) = bounds(items.iter().map(Item::centroid));
     let ext = sub(chi, clo);
     let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
         0
@@ -352,10 +367,10 @@ fn split(centroids: &[[f64; 3]], order: &mut [u32]) -> usize {
     } else {
         2
     };
-    let mid = order.len() / 2;
-    // Ties (and equal centroids) split by index position, which still halves.
-    order.select_nth_unstable_by(mid, |&a, &b| {
-        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+    let mid = items.len() / 2;
+    // Ties (and equal centroids) split by position, which still halves.
+    items.select_nth_unstable_by(mid, |a, b| {
+        a.centroid_on(axis).total_cmp(&b.centroid_on(axis))
     });
     mid
 }
@@ -435,6 +450,7 @@ fn ray_triangle(o: [f64; 3], d: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3])
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::{add, scale};
 
     /// Small triangles scattered through a box by a fixed sequence (a linear
     /// congruential generator), more than one parallel split's worth.
@@ -477,13 +493,22 @@ mod tests {
         let faces: Vec<u32> = (0..tris.len() as u32).collect();
         let bvh = Bvh::build(tris.clone(), faces);
         // The one-thread build of the whole: what `build` did before its top split.
-        let centroids: Vec<[f64; 3]> = tris
+        let mut items: Vec<Item> = tris
             .iter()
-            .map(|t| scale(add(add(t[0], t[1]), t[2]), 1.0 / 3.0))
+            .enumerate()
+            .map(|(f, &corners)| Item {
+                corners,
+                face: f as u32,
+            })
             .collect();
-        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
-        let one_thread = sequential_subtree(&tris, &centroids, &mut order, 0);
+        let one_thread = sequential_subtree(&mut items, 0);
+        let order: Vec<u32> = items.iter().map(|it| it.face).collect();
         assert_eq!(bvh.faces, order);
+        // The split compares centroids as the mesh code computes them.
+        for it in &items {
+            let [a, b, c] = it.corners;
+            assert_eq!(it.centroid(), scale(add(add(a, b), c), 1.0 / 3.0));
+        }
         assert_eq!(bvh.nodes.len(), one_thread.len());
         same_tree(&bvh.nodes, 0, &one_thread, 0);
         // Every node's box holds its triangles, and its children split its range.
