@@ -209,9 +209,11 @@ impl<D: Domain> Shell<D> {
         (-solid).max(self.sphere_value(p))
     }
 
-    /// The sphere's spacing: an eighth of its radius, never finer than `h`.
+    /// The sphere's spacing: a quarter of its radius, never finer than `h`. (The sphere
+    /// only closes the shell: tunnels lie at the surface. An eighth, as before issue 18,
+    /// gave the kitten's shell 17 % more unknowns and the same loops.)
     fn sphere_spacing(&self, h: f64) -> f64 {
-        (self.radius / 8.0).max(h)
+        (self.radius / 4.0).max(h)
     }
 }
 
