@@ -27,7 +27,10 @@
 //!    the solve's error, not the field, orders neighbouring values, so those critical
 //!    points are only counted ([`StepSummary::drained`]) —, give every 2-saddle its
 //!    topological role by a superlevel sweep ([`roles`]: separating with a bulge ratio,
-//!    cycle-closing, or a local cycle: lattice noise) and fit its Hessian ([`hessian`]);
+//!    cycle-closing, or a local cycle: lattice noise) and fit its Hessian ([`hessian`]).
+//!    This analysis of level `k` (mostly sequential) runs while level `k + 1`'s heat
+//!    step (parallel) is solved; the two share nothing they write, so the result is
+//!    that of running them in turn;
 //! 4. select. Scale space: a 2-saddle track is a neck candidate when it lives at least
 //!    `min_levels` levels, its Hessian has signature (−, −, +) at some level, and it is
 //!    cycle-closing at such a level (then its *representative* level, where it is
@@ -321,55 +324,72 @@ pub fn analyze_with_progress(
         ..MorseTimings::default()
     };
 
-    // 2–3. Heat steps; at every classified one, classify, track, give roles, fit.
+    // 2–3. Heat steps; at every classified one, classify, track, give roles, fit. A
+    // level is analysed while the next level's heat step is solved: the analysis is
+    // mostly sequential, the solve parallel, and neither reads what the other writes
+    // (so the result is the one of doing them in turn).
+    let solve = |solver: &mut HeatSolver, tau: f64, f: &[f64]| {
+        let start = Instant::now();
+        solver.set_tau(tau);
+        let (mut next, report) = solver.step(f);
+        if rescaled {
+            rescale(&mut next);
+        }
+        (next, report, start.elapsed().as_secs_f64())
+    };
     let mut f = field.to_vec();
     let mut reports = Vec::with_capacity(plan.len());
     let mut steps = Vec::new();
     let mut tracker = Tracker::new();
     let mut observations: Vec<Vec<Observation>> = Vec::new();
     progress.start("smoothing and critical points", plan.len() as u64);
+    let mut solved = plan.first().map(|p| solve(&mut solver, p.tau, &f));
     for (k, planned) in plan.iter().enumerate() {
         let step = k + 1;
         progress.advance(1);
-        let start = Instant::now();
-        solver.set_tau(planned.tau);
-        let (next, report) = solver.step(&f);
-        f = next;
-        if rescaled {
-            rescale(&mut f);
-        }
+        let Some((level, report, seconds)) = solved.take() else {
+            break;
+        };
         reports.push(report);
-        timings.smoothing += start.elapsed().as_secs_f64();
-        if !planned.classify {
-            continue;
-        }
-        let start = Instant::now();
-        let classification = links.classify_again(&f, &mut sides);
-        timings.classification += start.elapsed().as_secs_f64();
-        let start = Instant::now();
-        let (critical, drained) =
-            critical_points(mesh, &f, &classification, options.track_radius, floor);
-        let events = tracker.advance(step, &critical);
-        let roles = sweep.roles(&f, &classification, field);
-        observe(
-            mesh,
-            &f,
-            step,
-            &critical,
-            &roles.roles,
-            &tracker,
-            &mut observations,
-        );
-        steps.push(summarize(
-            step,
-            planned.scale,
-            &classification,
-            &roles,
-            (morse_expected.sum, sweep.cycle_rank()),
-            events,
-            drained,
-        ));
-        timings.selection += start.elapsed().as_secs_f64();
+        timings.smoothing += seconds;
+        let analyse = || {
+            if !planned.classify {
+                return (0.0, 0.0);
+            }
+            let start = Instant::now();
+            let classification = links.classify_again(&level, &mut sides);
+            let classifying = start.elapsed().as_secs_f64();
+            let start = Instant::now();
+            let (critical, drained) =
+                critical_points(mesh, &level, &classification, options.track_radius, floor);
+            let events = tracker.advance(step, &critical);
+            let roles = sweep.roles(&level, &classification, field);
+            observe(
+                mesh,
+                &level,
+                step,
+                &critical,
+                &roles.roles,
+                &tracker,
+                &mut observations,
+            );
+            steps.push(summarize(
+                step,
+                planned.scale,
+                &classification,
+                &roles,
+                (morse_expected.sum, sweep.cycle_rank()),
+                events,
+                drained,
+            ));
+            (classifying, start.elapsed().as_secs_f64())
+        };
+        let next = || plan.get(k + 1).map(|p| solve(&mut solver, p.tau, &level));
+        let ((classifying, selecting), next) = rayon::join(analyse, next);
+        timings.classification += classifying;
+        timings.selection += selecting;
+        solved = next;
+        f = level;
     }
     progress.finish();
 

@@ -193,7 +193,10 @@ pub struct RejectedSaddle {
     pub reason: RejectReason,
 }
 
-/// Wall-clock seconds of each part of [`analyze`](super::analyze).
+/// Wall-clock seconds of each part of [`analyze`](super::analyze). A level is analysed
+/// (classified, tracked, given roles) while the next level's heat step is solved, so
+/// `smoothing`, `classification` and `selection` overlap: their sum exceeds the wall
+/// clock of the whole.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct MorseTimings {
     /// `L`, `M`, the reduced system and the links.

@@ -401,7 +401,8 @@ fn find_side(
     };
 
     // The side's timings: laps of one clock, so they add up to its wall time; the
-    // Morse stage's own split tells smoothing from critical points.
+    // Morse stage's own split tells smoothing (the heat steps, during which the level
+    // before is analysed) from critical points (the rest of it).
     let smoothing = result.timings.assembly + result.timings.smoothing;
     let timings = StageTimings {
         volume_mesh: volume_seconds,
