@@ -172,7 +172,7 @@ impl Domain for SurfaceInside<'_> {
 
 /// The space between a solid and a sphere around it: `max(−solid, |p − centre| − radius)`.
 /// Its boundary is the solid's (vertex kind from the solid) and the sphere's
-/// ([`VertexKind::Outer`]); the sphere is only a container, meshed at an eighth of its
+/// ([`VertexKind::Outer`]); the sphere is only a container, meshed at a quarter of its
 /// radius.
 #[derive(Debug, Clone)]
 pub struct Shell<D> {
