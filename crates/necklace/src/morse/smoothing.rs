@@ -331,9 +331,13 @@ impl HeatSolver {
             }
             let beta = rz_next / rz;
             rz = rz_next;
-            p.par_iter_mut()
-                .zip(&z)
-                .for_each(|(p, z)| *p = z + beta * *p);
+            p.par_chunks_mut(CHUNK)
+                .zip(z.par_chunks(CHUNK))
+                .for_each(|(p, z)| {
+                    for (p, z) in p.iter_mut().zip(z) {
+                        *p = z + beta * *p;
+                    }
+                });
         }
         report.converged = report.residual <= tolerance;
         (x, report)
