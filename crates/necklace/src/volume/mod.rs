@@ -573,15 +573,15 @@ fn build_octree(
                 if thin_spacing * std::f64::consts::SQRT_2 < size {
                     return true;
                 }
-                if f.abs() >= half_diagonal + coarsest {
-                    return false;
-                }
                 // Only where the boundary may pass (f is 1-Lipschitz). A margin of one
                 // more cell (`half_diagonal + wanted`, before issue 18) kept a band of
                 // fine cells 3–4 h thick on each side: 15–30 % more unknowns and the
                 // same loops, angles and topology on the shared models.
+                if f.abs() >= half_diagonal {
+                    return false;
+                }
                 let wanted = domain.spacing_near(grid.point(cell.center()), h).max(h);
-                f.abs() < half_diagonal && size > wanted * (1.0 + 1e-9)
+                size > wanted * (1.0 + 1e-9)
             })
             .collect();
         leaves_so_far += decisions.iter().filter(|&&d| !d).count();
