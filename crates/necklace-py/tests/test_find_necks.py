@@ -34,6 +34,10 @@ def test_dumbbell_same_loops_as_the_cli_and_its_neck_is_2_pi_r(cli, dumbbell):
     # The neck's cylinder has radius 0.15; the polygonal mesh's loop is a little shorter.
     assert neck.length == pytest.approx(2 * math.pi * 0.15, rel=0.02)
     assert neck.points.shape == (len(neck.edges), 3)
+    # Its lasso is the neck's circle, across the axis (x).
+    assert neck.lasso.radius == pytest.approx(0.15, rel=0.02)
+    assert abs(neck.lasso.normal[0]) > 0.99
+    assert neck.lasso.max_deviation < 0.02 * 0.15
     assert result.morse_ok
 
 

@@ -33,6 +33,7 @@ __all__ = [
     "NecklaceError",
     "NeckResult",
     "Loop",
+    "Lasso",
     "DroppedSaddle",
     "CriticalPoints",
     "VolumeField",
@@ -41,6 +42,26 @@ __all__ = [
 ]
 
 _MAX_INDEX = 2**32 - 1
+
+
+@dataclass(frozen=True)
+class Lasso:
+    """The circle that fits a loop best: what a gripper or a rope lassoes.
+
+    Attributes:
+        center: ``(3,)`` the circle's centre.
+        normal: ``(3,)`` unit normal of its plane (the loop's own best-fit plane,
+            oriented like the loop).
+        radius: the circle's radius.
+        max_deviation: the largest distance from the loop to the circle.
+        rms_deviation: the root-mean-square distance (weighted by length).
+    """
+
+    center: np.ndarray
+    normal: np.ndarray
+    radius: float
+    max_deviation: float
+    rms_deviation: float
 
 
 @dataclass(frozen=True)
@@ -71,6 +92,7 @@ class Loop:
         homology: its Z2 homology class, one ``"0"``/``"1"`` per basis cycle.
         separating: whether it cuts the surface in two (class 0).
         initial: how the initial loop was built (``"plane"`` or ``"membrane"``).
+        lasso: its best-fit circle (:class:`Lasso`).
         data: every field of the loop as ``loops.json`` has it (``bulge``,
             ``areas``, ``opening``, ``flatness``, ``reason``, ``tightening``, ...).
     """
@@ -91,6 +113,7 @@ class Loop:
     homology: str
     separating: bool
     initial: str
+    lasso: Lasso
     data: Dict[str, Any] = field(repr=False)
 
     def __repr__(self) -> str:
@@ -301,6 +324,13 @@ def _loop(d: Dict[str, Any]) -> Loop:
         homology=d["homology"],
         separating=d["separating"],
         initial=d["initial"],
+        lasso=Lasso(
+            center=_vec(d["lasso"]["center"]),
+            normal=_vec(d["lasso"]["normal"]),
+            radius=d["lasso"]["radius"],
+            max_deviation=d["lasso"]["max_deviation"],
+            rms_deviation=d["lasso"]["rms_deviation"],
+        ),
         data=d,
     )
 

@@ -30,6 +30,7 @@
 //!    class and each within `merge_overlap` × radius of the other), keeping the
 //!    highest persistence, then the shortest; order by persistence (descending), then
 //!    length.
+//! 4. [`lasso`]: each kept loop's best-fit circle and how far the loop strays from it.
 //!
 //! Units are those of the surface. Every seed ends either as a loop or in `dropped` with
 //! a reason. Seeds are processed in parallel; the result does not depend on the thread
@@ -37,6 +38,7 @@
 
 pub mod classes;
 pub mod cut;
+pub mod lasso;
 pub mod membrane;
 pub mod opening;
 mod report;
@@ -44,6 +46,7 @@ mod selection;
 mod surface;
 mod transfer;
 
+pub use lasso::{fit_lasso, Lasso};
 pub use report::{DropReason, DroppedLoop, LoopResult, LoopTimings, NeckLoop, TighteningReport};
 pub use selection::{best_fit_normal, centroid};
 use selection::{neck_loop, one_per_neck, select};

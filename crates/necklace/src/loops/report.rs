@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Initial, MembraneFailure, Role, Seed, SurfacePoint, TightenStatus};
+use super::{Initial, Lasso, MembraneFailure, Role, Seed, SurfacePoint, TightenStatus};
 use crate::mesh::{Side, SurfaceMesh};
 
 /// A neck loop.
@@ -45,6 +45,11 @@ pub struct NeckLoop {
     pub normal: [f64; 3],
     /// `length / 2π`.
     pub radius: f64,
+    /// The best-fit circle and how far the loop strays from it (module
+    /// [`lasso`](super::lasso)): what a grasp planner lassoes. Always present in what
+    /// this version writes; absent only in a `loops.json` written before it existed.
+    #[serde(default)]
+    pub lasso: Option<Lasso>,
     /// The saddle it came from.
     pub saddle: [f64; 3],
     /// Index of that saddle among the seeds.

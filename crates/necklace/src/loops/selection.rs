@@ -4,8 +4,8 @@
 //! ([`select`]). Every loop not kept is a [`DroppedLoop`] with its reason.
 
 use super::{
-    membrane, Candidate, DropReason, DroppedLoop, LoopOptions, NeckLoop, Role, Seed, TightenStatus,
-    TighteningReport,
+    fit_lasso, membrane, Candidate, DropReason, DroppedLoop, LoopOptions, NeckLoop, Role, Seed,
+    TightenStatus, TighteningReport,
 };
 use crate::geom::{add, closest_on_segment, cross, dot, norm, scale, sub};
 use crate::mesh::{Side, SurfaceMesh, Z2Basis};
@@ -212,9 +212,11 @@ pub(super) fn neck_loop(
         seed.persistence, t.rounds, t.initial_length, t.length, how, options.max_length
     );
     let center = centroid(&t.points);
+    let normal = best_fit_normal(&t.points, center);
     NeckLoop {
         kind,
-        normal: best_fit_normal(&t.points, center),
+        lasso: Some(fit_lasso(&t.points, center, normal)),
+        normal,
         center,
         radius: t.length / (2.0 * std::f64::consts::PI),
         saddle: seed.position,

@@ -292,6 +292,14 @@ fn a_dumbbell_has_one_handle_loop_around_its_neck_and_no_tunnel() {
     );
     assert!(dist(l.center, [0.0; 3]) < 0.02, "{:?}", l.center);
     assert!(l.normal[0].abs() > 0.99);
+    // The lasso is the neck's circle: its radius, round the axis, across it.
+    let lasso = l.lasso.expect("a kept loop has its lasso");
+    let neck = shape.param("neck");
+    assert!((lasso.radius - neck).abs() < 0.005 * neck, "{lasso:?}");
+    assert!(dist(lasso.center, [0.0; 3]) < 0.02, "{lasso:?}");
+    assert!(lasso.normal[0].abs() > 0.99, "{lasso:?}");
+    assert!(lasso.max_deviation < 0.02 * neck, "{lasso:?}");
+    assert!(lasso.rms_deviation <= lasso.max_deviation);
 }
 
 #[test]
