@@ -306,7 +306,11 @@ fn render(
         None => Vec::new(),
     };
     necklace::output::check_overlay(&surface, &curves, &saddles)?;
-    let scene = necklace::output::loop_scene(&surface, &curves, &saddles);
+    let name = mesh.file_name().map_or_else(
+        || mesh.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let scene = necklace::output::loop_scene(&name, &surface, &curves, &saddles);
     let rendered = necklace::render::render(&scene, options)?;
     rendered.image.write_png(&output)?;
     Ok(format!(

@@ -34,7 +34,7 @@ use crate::io;
 use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::VertexType;
 use crate::pipeline::{NeckReport, TrackedPoint};
-use crate::render::{self, Curve, Dot, RenderOptions, Scene};
+use crate::render::{self, Curve, Dot, LegendEntry, Mark, RenderOptions, Scene};
 use crate::tet::TetMesh;
 
 /// The version of the JSON written by [`report_json`]; raised when a field changes
@@ -137,10 +137,17 @@ pub fn membranes(report: &NeckReport) -> (SurfaceMesh, Vec<i32>) {
     (mesh, labels)
 }
 
+/// How far outside the surface's bounding box a loop read from a file may reach, as a
+/// fraction of the box's diagonal (see [`check_overlay`]).
+pub const LOOP_SLACK: f64 = 0.01;
+
 /// Check that loops and saddles read from files belong to `surface`: every loop has at
-/// least three points, and every point lies within one bounding-box diagonal of the
-/// surface's box (farther, the picture would frame the stray points and the surface
-/// would shrink to a dot: most likely the file of another mesh).
+/// least three points and lies in the surface's bounding box (a neck loop lies on the
+/// surface; up to [`LOOP_SLACK`] of the diagonal is let through for a loop written to
+/// a few digits, or found on a copy of the surface), and every saddle within one
+/// bounding-box diagonal of the box (a tunnel's saddle is off the surface; farther,
+/// the picture would frame the stray points and the surface would shrink to a dot).
+/// Either way, most likely the file of another mesh.
 pub fn check_overlay(
     surface: &SurfaceMesh,
     loops: &[LoopCurve],
@@ -165,9 +172,11 @@ pub fn check_overlay(
             )));
         }
         let far = l.points.iter().map(away).fold(0.0, f64::max);
-        if far > 1.0 {
+        if far > LOOP_SLACK {
             return Err(Error::invalid_argument(format!(
-                "loop {i} reaches {far:.3e} bounding-box diagonals outside the mesh: are these the loops of another mesh?"
+                "loop {i} reaches {:.3} % of the diagonal outside the mesh's bounding box (at most {} % is let through): are these the loops of another mesh?",
+                100.0 * far,
+                100.0 * LOOP_SLACK
             )));
         }
     }
@@ -185,19 +194,43 @@ pub fn check_overlay(
 }
 
 /// The picture's scene: the surface, each loop in its kind's colour labelled by its
-/// index, `saddles` as dots, and a legend of the kinds present.
+/// index, `saddles` as dots, a legend of the kinds present (and of the dots), and a
+/// title: `name` (the mesh file's name), the surface's counts and the loops'.
 pub fn loop_scene<'a>(
+    name: &str,
     surface: &'a SurfaceMesh,
     loops: &[LoopCurve],
     saddles: &[[f64; 3]],
 ) -> Scene<'a> {
     let mut legend = Vec::new();
+    let count = |kind: Side| loops.iter().filter(|l| l.kind == kind).count();
     for kind in [Side::Inside, Side::Outside] {
-        if loops.iter().any(|l| l.kind == kind) {
-            legend.push((Side::neck_name(kind).to_string(), kind_color(kind)));
+        if count(kind) > 0 {
+            legend.push(LegendEntry {
+                text: format!("{} loop", Side::neck_name(kind)),
+                color: kind_color(kind),
+                mark: Mark::Line,
+            });
         }
     }
+    if !saddles.is_empty() {
+        legend.push(LegendEntry {
+            text: "saddle (the centre of a neck)".to_string(),
+            color: SADDLE_COLOR,
+            mark: Mark::Dot,
+        });
+    }
+    let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
+    let title = format!(
+        "{name}: {}, {}, {}, {}",
+        plural(surface.num_vertices(), "vertex"),
+        plural(surface.num_triangles(), "triangle"),
+        plural(count(Side::Inside), "handle"),
+        plural(count(Side::Outside), "tunnel"),
+    )
+    .replace("vertexs", "vertices");
     Scene {
+        title: Some(title),
         mesh: surface,
         curves: loops
             .iter()
@@ -283,7 +316,12 @@ pub fn write_run(
     if let Some(picture) = &options.picture {
         let path = dir.join("view.png");
         let saddles: Vec<[f64; 3]> = report.loops.iter().map(|l| l.saddle).collect();
-        let rendered = render::render(&loop_scene(surface, &curves, &saddles), picture)?;
+        let name = input.and_then(Path::file_name).map_or_else(
+            || "surface".to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let scene = loop_scene(&name, surface, &curves, &saddles);
+        let rendered = render::render(&scene, picture)?;
         rendered.image.write_png(&path)?;
         written.push(path);
         if let Some(image) = barcode_picture(report)? {

@@ -608,10 +608,21 @@ fn render_refuses_what_it_cannot_draw() {
         "empty.json",
         r#"{"loops": [{"kind": "handle", "points": []}]}"#,
     );
+    // A loop floating a little above the torus (z = 1.2, the tube's radius is below
+    // 0.5): within a diagonal of the box, but not on this surface.
+    let above = write(
+        &dir,
+        "above.json",
+        r#"{"loops": [{"kind": "handle", "points": [[0, 0, 1.2], [0.1, 0, 1.2], [0, 0.1, 1.2]]}]}"#,
+    );
     let png = dir.join("x.png");
     refused(
         &necklace(&["render", s(&mesh), "--loops", s(&far), "-o", s(&png)]),
         &["outside the mesh"],
+    );
+    refused(
+        &necklace(&["render", s(&mesh), "--loops", s(&above), "-o", s(&png)]),
+        &["outside the mesh's bounding box", "another mesh"],
     );
     refused(
         &necklace(&["render", s(&mesh), "--loops", s(&empty), "-o", s(&png)]),

@@ -2,10 +2,12 @@
 //! (neck loops) and dots (saddles) from several directions into one PNG, and line charts
 //! for benchmarks ([`chart`]). Not part of the paper's method; it draws its figures.
 //!
-//! What a picture shows: the surface shaded (Lambert with a key and a fill light fixed to
-//! the camera, a little ambient and specular, outlines where the depth jumps), curves as
-//! shaded tubes of constant screen width with a label (the loop's index) beside each, dots
-//! as small balls. Overlay hidden behind the surface shows through at `1 − opacity`, so
+//! What a picture shows: a title band (when the scene has a title), the surface shaded
+//! (Lambert with a key and a fill light fixed to the camera, a little ambient and
+//! specular, outlines where the depth jumps), curves as shaded tubes of constant screen
+//! width with a label (the loop's index) beside each, placed so that no two labels, the
+//! legend and the view's name overlap ([`labels`]), dots as small balls, and a legend
+//! of lines and dots. Overlay hidden behind the surface shows through at `1 − opacity`, so
 //! the back half of a loop and the saddles inside the solid stay visible. Each view is an
 //! orthographic projection framed to the scene's bounding box; views are laid out in a
 //! grid (1, 2 or 3 in a row, 4 as 2 × 2). Everything is drawn at `supersample` times the
@@ -19,6 +21,7 @@
 pub mod barcode;
 pub mod chart;
 mod font;
+pub mod labels;
 mod raster;
 
 use std::path::Path;
@@ -28,6 +31,7 @@ use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::SurfaceMesh;
+use labels::{place_labels, LabelRequest};
 use raster::{Canvas, Rgb};
 
 /// A direction to look from.
@@ -199,8 +203,30 @@ pub struct Scene<'a> {
     pub curves: Vec<Curve>,
     /// Dots.
     pub dots: Vec<Dot>,
-    /// Legend entries (text, colour), drawn in the lower left corner of the picture.
-    pub legend: Vec<(String, [u8; 3])>,
+    /// Legend entries, drawn in the lower left corner of the picture.
+    pub legend: Vec<LegendEntry>,
+    /// A line of text across the top of the picture (the mesh and its counts), if any.
+    pub title: Option<String>,
+}
+
+/// One line of the legend: a mark in a colour and what it stands for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LegendEntry {
+    /// What the mark stands for.
+    pub text: String,
+    /// sRGB colour.
+    pub color: [u8; 3],
+    /// How it is drawn: as a curve or as a dot.
+    pub mark: Mark,
+}
+
+/// The shape of a legend mark.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mark {
+    /// A short bar, like a curve.
+    Line,
+    /// A disc, like a dot.
+    Dot,
 }
 
 /// How to draw it.
@@ -460,7 +486,13 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<Rendered> {
     check(scene, options)?;
     let (cols, rows) = layout(options.views);
     let tile = options.size as usize / cols;
-    let (width, height) = (tile * cols, tile * rows);
+    let title_scale = text_scale(tile as f64);
+    let band = if scene.title.is_some() {
+        (2.2 * (font::HEIGHT * title_scale) as f64).ceil() as usize
+    } else {
+        0
+    };
+    let (width, height) = (tile * cols, tile * rows + band);
     let (lo, hi) = scene_bounds(scene);
     let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
     let normals = vertex_normals(scene.mesh);
@@ -469,7 +501,10 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<Rendered> {
         .enumerate()
         .map(|(i, &view)| Tile {
             view,
-            origin: [((i % cols) * tile) as u32, ((i / cols) * tile) as u32],
+            origin: [
+                ((i % cols) * tile) as u32,
+                ((i / cols) * tile + band) as u32,
+            ],
             projection: Projection::framed(view, lo, hi, tile as f64, 0.07),
         })
         .collect();
@@ -490,6 +525,12 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<Rendered> {
         .collect();
     let mut pixels = vec![[0u8; 3]; width * height];
     let ss = options.supersample as usize;
+    if let Some(title) = &scene.title {
+        let mut canvas = Canvas::new(width * ss, band * ss, rgb(options.background));
+        let pad = 0.6 * (font::HEIGHT * title_scale * ss) as f64;
+        canvas.text(pad, pad, title_scale * ss, title, [0.15; 3], None);
+        canvas.reduce_into(ss, &mut pixels, width, 0, 0);
+    }
     for (canvas, t) in canvases.iter().zip(&tiles) {
         canvas.reduce_into(
             ss,
@@ -565,45 +606,100 @@ fn draw_view(
     }
     canvas.composite(options.opacity as f32, (0.02 * diagonal) as f32);
 
-    // Text: labels beside the rightmost point of each curve, view name, legend.
-    let text_scale = ((projection.size / 220.0).round().max(1.0) * ss) as usize;
+    // Text: view name, legend, then the labels round them.
+    let text_scale = text_scale(projection.size) * options.supersample as usize;
     let glyph_h = (font::HEIGHT * text_scale) as f64;
-    let white = Some([1.0; 3]);
-    for curve in &scene.curves {
-        let Some(label) = &curve.label else { continue };
-        let Some(q) = curve
-            .points
-            .iter()
-            .map(|&p| to_canvas(p))
-            .max_by(|a, b| a[0].total_cmp(&b[0]))
-        else {
-            continue;
-        };
-        let dark = rgb(curve.color).map(|c| c * 0.7);
-        canvas.text(
-            q[0] + 2.0 * half_width,
-            q[1] - 0.5 * glyph_h,
-            text_scale,
-            label,
-            dark,
-            white,
-        );
-    }
+    let text_w = |text: &str, scale: usize| (font::text_width(text) * scale) as f64;
     let pad = 0.025 * size as f64;
+    let mut taken = Vec::new();
     if options.view_names {
         let small = (text_scale * 2 / 3).max(1);
         canvas.text(pad, pad, small, tile.view.name(), [0.45; 3], None);
+        let h = (font::HEIGHT * small) as f64;
+        taken.push([pad, pad, pad + text_w(tile.view.name(), small), pad + h]);
     }
-    if legend {
+    if legend && !scene.legend.is_empty() {
         let line = glyph_h * 1.6;
-        let mut y = size as f64 - pad - line * scene.legend.len() as f64;
-        for (text, color) in &scene.legend {
-            canvas.rect(pad, y, pad + 2.0 * glyph_h, y + glyph_h, rgb(*color));
-            canvas.text(pad + 2.6 * glyph_h, y, text_scale, text, [0.2; 3], None);
+        let top = size as f64 - pad - line * scene.legend.len() as f64;
+        let mut y = top;
+        let mut right = pad;
+        for entry in &scene.legend {
+            let color = rgb(entry.color);
+            match entry.mark {
+                Mark::Line => canvas.rect(pad, y, pad + 2.0 * glyph_h, y + glyph_h, color),
+                Mark::Dot => {
+                    let centre = [pad + glyph_h, y + 0.5 * glyph_h];
+                    canvas.flat_line(centre, centre, 0.5 * glyph_h, color);
+                }
+            }
+            let x = pad + 2.6 * glyph_h;
+            canvas.text(x, y, text_scale, &entry.text, [0.2; 3], None);
+            right = right.max(x + text_w(&entry.text, text_scale));
             y += line;
         }
+        taken.push([pad, top, right, y]);
+    }
+    let labelled: Vec<(&Curve, &String)> = scene
+        .curves
+        .iter()
+        .filter_map(|c| c.label.as_ref().map(|l| (c, l)))
+        .collect();
+    let requests: Vec<LabelRequest> = labelled
+        .iter()
+        .map(|(curve, label)| LabelRequest {
+            size: [text_w(label, text_scale), glyph_h],
+            anchors: label_anchors(&curve.points, &to_canvas),
+        })
+        .collect();
+    let bounds = [0.0, 0.0, size as f64, size as f64];
+    let margin = (font::ADVANCE * text_scale) as f64;
+    let placements = place_labels(&requests, &taken, bounds, 2.0 * half_width, margin);
+    let white = Some([1.0; 3]);
+    for ((curve, label), placement) in labelled.iter().zip(&placements) {
+        let dark = rgb(curve.color).map(|c| c * 0.7);
+        let [x0, y0, x1, y1] = placement.rect;
+        if let Some(anchor) = placement.leader {
+            let from = [anchor[0].clamp(x0, x1), anchor[1].clamp(y0, y1)];
+            canvas.flat_line(from, anchor, 0.35 * half_width, dark);
+        }
+        canvas.text(x0, y0, text_scale, label, dark, white);
     }
     canvas
+}
+
+/// Font pixels per character pixel for a view `side` pixels wide (before supersampling).
+fn text_scale(side: f64) -> usize {
+    (side / 220.0).round().max(1.0) as usize
+}
+
+/// Where a curve's label may go (canvas pixels), preferred first: beside its
+/// rightmost point, its leftmost, its top and bottom, then 16 points round it.
+fn label_anchors(points: &[[f64; 3]], to_canvas: &impl Fn([f64; 3]) -> [f64; 3]) -> Vec<[f64; 2]> {
+    let screen: Vec<[f64; 2]> = points
+        .iter()
+        .map(|&p| {
+            let q = to_canvas(p);
+            [q[0], q[1]]
+        })
+        .collect();
+    let extreme = |key: fn(&[f64; 2]) -> f64| {
+        screen
+            .iter()
+            .copied()
+            .max_by(|a, b| key(a).total_cmp(&key(b)))
+    };
+    let mut anchors: Vec<[f64; 2]> = [
+        extreme(|p| p[0]),
+        extreme(|p| -p[0]),
+        extreme(|p| -p[1]),
+        extreme(|p| p[1]),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let step = screen.len().div_ceil(16).max(1);
+    anchors.extend(screen.iter().step_by(step).copied());
+    anchors
 }
 
 /// A picture is written as PNG only: refuse another extension (PNG bytes in a `.jpg`

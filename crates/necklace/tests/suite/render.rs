@@ -6,7 +6,7 @@ use necklace::io;
 use necklace::output::{self, OutputOptions, HANDLE_COLOR};
 use necklace::pipeline::{find_necks, NeckOptions};
 use necklace::render::chart::{chart, Chart, Series};
-use necklace::render::{render, Curve, Image, Projection, RenderOptions, Scene, View};
+use necklace::render::{render, Curve, Image, Mark, Projection, RenderOptions, Scene, View};
 use necklace::shapes::{Shape, ShapeKind};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
@@ -58,13 +58,43 @@ fn a_rendered_dumbbell_shows_the_handle_colour_at_its_neck_and_not_at_its_balls(
     let written = output::write_run(&dir, &surface, &report, &files, None).unwrap();
     assert!(written.contains(&dir.join("view.png")));
     let image = Image::read_png(dir.join("view.png")).unwrap();
-    assert_eq!((image.width, image.height), (800, 800));
+    // Two by two views of 400 pixels under a title band.
+    assert_eq!(image.width, 800);
+    assert!((820..=860).contains(&image.height), "{}", image.height);
 
-    // Where each view put the neck, found by rendering the same scene again.
+    // Where each view put the neck, found by rendering the same scene again (the
+    // saddles as dots: the picture's are the loops' saddles).
     let curves = output::loop_curves(&report);
-    let scene = output::loop_scene(&surface, &curves, &[]);
+    let saddles: Vec<[f64; 3]> = report.loops.iter().map(|l| l.saddle).collect();
+    let scene = output::loop_scene("surface", &surface, &curves, &saddles);
     let rendered = render(&scene, files.picture.as_ref().unwrap()).unwrap();
-    assert_eq!(rendered.image.pixels.len(), image.pixels.len());
+    assert_eq!(rendered.image, image);
+    // The title names the mesh and its counts, in dark text above the first view.
+    let title = scene.title.as_deref().unwrap();
+    assert!(
+        title.starts_with("surface: ") && title.contains("1 handle, 0 tunnels"),
+        "{title}"
+    );
+    let band = rendered.tiles[0].origin[1];
+    assert!(band > 0);
+    let dark_in_band = (0..band)
+        .flat_map(|y| (0..image.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            image
+                .pixel(x, y)
+                .is_some_and(|c| c.iter().all(|&v| v < 100))
+        })
+        .count();
+    assert!(dark_in_band > 50, "{dark_in_band}");
+    // The legend explains the loops' colour and the dots.
+    let marks: Vec<(&str, Mark)> = scene
+        .legend
+        .iter()
+        .map(|e| (e.text.as_str(), e.mark))
+        .collect();
+    assert_eq!(marks[0], ("handle loop", Mark::Line));
+    assert_eq!(marks[1].1, Mark::Dot);
+    assert!(marks[1].0.starts_with("saddle"));
     let front = rendered
         .tiles
         .iter()
@@ -153,6 +183,7 @@ fn bad_render_options_and_empty_meshes_are_errors() {
         }],
         dots: vec![],
         legend: vec![],
+        title: None,
     };
     assert!(render(&scene, &RenderOptions::default()).is_err());
     let scene = Scene {
