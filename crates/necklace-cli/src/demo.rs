@@ -34,6 +34,7 @@ pub fn run(dir: &Path, ui: &Ui) -> Result<String> {
         let files = OutputOptions {
             picture: Some(RenderOptions::default()),
             volume: false,
+            html: true,
         };
         write_run(&folder, &surface, &report, &files, None)?;
         io::write_mesh(folder.join("surface.obj"), &surface)?;

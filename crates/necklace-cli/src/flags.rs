@@ -81,6 +81,43 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Write the interactive page (view.html) of an existing run's folder: the surface,
+    /// its loops and saddles to turn round, a table of the loops, the barcode.
+    View {
+        /// The folder `necklace loops MESH -o DIR` wrote (its loops.json is read).
+        dir: PathBuf,
+        /// The mesh (default: the file loops.json names as its input).
+        #[arg(long)]
+        mesh: Option<PathBuf>,
+    },
+    /// Cut a surface along its neck loops into parts: the surface with the loops as
+    /// edges and a segment label per face (PLY), and a table of the segments (area,
+    /// volume with the loops capped, Euler characteristic, boundaries, genus, bounding
+    /// loops). Separating loops split parts off; cycle-closing loops cut a handle open.
+    Segment {
+        /// The closed surface mesh.
+        mesh: PathBuf,
+        /// The loops to cut along, from `necklace loops MESH -o DIR` (DIR/loops.json, or
+        /// `--json` output); without it, the loops are found first (default options).
+        #[arg(long)]
+        loops: Option<PathBuf>,
+        /// Cut only along these loops (their indices in loops.json); repeat for several.
+        /// Default: every loop.
+        #[arg(long = "loop", value_name = "INDEX")]
+        chosen: Vec<usize>,
+        /// Without --loops: find handle loops only.
+        #[arg(long)]
+        handles: bool,
+        /// Without --loops: find tunnel loops only.
+        #[arg(long)]
+        tunnels: bool,
+        /// The segmented surface, as PLY with the face property `segment`.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Print `{"segments": [...]}` instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Find the neck loops of a closed surface: handles (around narrow parts of the
     /// solid) and tunnels (around narrow parts of the space around it); both unless one
     /// is asked for.
@@ -132,6 +169,10 @@ pub enum Command {
         /// Also write view.png (a picture of the surface and its loops) into the folder.
         #[arg(long, requires = "output")]
         png: bool,
+        /// Also write view.html (an interactive page: turn the shape, click a loop) into
+        /// the folder.
+        #[arg(long, requires = "output")]
+        html: bool,
         /// Also write field.vtu (volume meshes with the smoothed field) into the folder.
         #[arg(long, requires = "output")]
         volume: bool,

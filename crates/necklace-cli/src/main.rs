@@ -130,6 +130,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             max_flatness,
             output,
             png,
+            html,
             volume,
             json,
         } => {
@@ -157,8 +158,26 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             let files = OutputOptions {
                 picture: png.then(RenderOptions::default),
                 volume,
+                html,
             };
             loops(mesh, &options, output.map(|o| (o, files)), json, ui)
+        }
+        Command::View { dir, mesh } => view(dir, mesh),
+        Command::Segment {
+            mesh,
+            loops,
+            chosen,
+            handles,
+            tunnels,
+            output,
+            json,
+        } => {
+            let options = pipeline::NeckOptions {
+                handles: handles || !tunnels,
+                tunnels: tunnels || !handles,
+                ..pipeline::NeckOptions::default()
+            };
+            segment(mesh, loops, &chosen, &options, output, json, ui)
         }
         Command::Render {
             mesh,
@@ -285,6 +304,84 @@ fn loops(
         return Ok(serde_json::to_string_pretty(&value)? + "\n");
     }
     print::loops_text(&path, &report, &written)
+}
+
+fn view(dir: PathBuf, mesh: Option<PathBuf>) -> Result<String> {
+    let (report, input) = necklace::output::read_run_json(dir.join("loops.json"))?;
+    let Some(mesh) = mesh.or(input) else {
+        return Err(necklace::Error::invalid_argument(
+            "the run's loops.json names no mesh: give it with --mesh",
+        )
+        .into());
+    };
+    let surface = io::read_mesh(&mesh)?;
+    let curves = necklace::output::loop_curves(&report);
+    necklace::output::check_overlay(&surface, &curves, &[])?;
+    let page = dir.join("view.html");
+    check_output_file(&page)?;
+    let name = mesh.file_name().map_or_else(
+        || mesh.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let shown = necklace::output::write_html(&page, &name, &surface, &report)?;
+    let decimated = if shown.shown_triangles < shown.triangles {
+        format!(
+            " (the surface decimated for display: {} of {} triangles)",
+            shown.shown_triangles, shown.triangles
+        )
+    } else {
+        String::new()
+    };
+    Ok(format!(
+        "{}: {} loops{decimated} -> {}\n",
+        mesh.display(),
+        report.loops.len(),
+        page.display()
+    ))
+}
+
+fn segment(
+    path: PathBuf,
+    loops: Option<PathBuf>,
+    chosen: &[usize],
+    options: &pipeline::NeckOptions,
+    output: PathBuf,
+    json: bool,
+    ui: &Ui,
+) -> Result<String> {
+    check_output_file(&output)?;
+    let surface = io::read_mesh(&path)?;
+    let report = match &loops {
+        Some(file) => necklace::output::read_report_json(file)?,
+        None => pipeline::find_necks_with_progress(&surface, options, &ui.bars)?,
+    };
+    let picked: Vec<&necklace::loops::NeckLoop> = if chosen.is_empty() {
+        report.loops.iter().collect()
+    } else {
+        chosen
+            .iter()
+            .map(|&i| {
+                report.loops.get(i).ok_or_else(|| {
+                    necklace::Error::invalid_argument(format!(
+                        "--loop {i}: there are {} loops",
+                        report.loops.len()
+                    ))
+                })
+            })
+            .collect::<necklace::Result<_>>()?
+    };
+    let segmentation = pipeline::segment_along_loops(&surface, &picked)?;
+    necklace::output::write_segmentation(&output, &segmentation)?;
+    if json {
+        let value = necklace::output::segments_json(&segmentation)?;
+        return Ok(serde_json::to_string_pretty(&value)? + "\n");
+    }
+    Ok(print::segments_text(
+        &path,
+        picked.len(),
+        &segmentation,
+        &output,
+    ))
 }
 
 fn render(

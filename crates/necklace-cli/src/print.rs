@@ -316,3 +316,53 @@ pub fn list_shapes() -> String {
     }
     out
 }
+
+/// The table of `necklace segment`: one line per segment.
+pub fn segments_text(
+    path: &Path,
+    loops: usize,
+    segmentation: &necklace::segment::Segmentation,
+    output: &Path,
+) -> String {
+    let mut out = format!(
+        "{}: cut along {loops} loop(s) into {} segment(s)\n",
+        path.display(),
+        segmentation.segments.len()
+    );
+    out += "segment  triangles        area        volume  euler  boundaries  genus  loops\n";
+    for s in &segmentation.segments {
+        let volume = s.volume.map_or_else(|| "-".to_string(), significant);
+        let loops: Vec<String> = s.loops.iter().map(usize::to_string).collect();
+        let _ = writeln!(
+            out,
+            "{:>7}  {:>9}  {:>10}  {:>12}  {:>5}  {:>10}  {:>5}  {}",
+            s.id,
+            s.triangles,
+            significant(s.area),
+            volume,
+            s.euler,
+            s.boundaries,
+            s.genus,
+            if loops.is_empty() {
+                "-".to_string()
+            } else {
+                loops.join(",")
+            }
+        );
+    }
+    let _ = writeln!(out, "-> {}", output.display());
+    out
+}
+
+/// `x` to six significant digits, without an exponent for ordinary sizes.
+fn significant(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    if (-4..9).contains(&magnitude) {
+        format!("{x:.*}", (5 - magnitude).max(0) as usize)
+    } else {
+        format!("{x:.5e}")
+    }
+}

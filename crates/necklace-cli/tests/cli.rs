@@ -576,3 +576,157 @@ fn bench_prints_a_row_per_model_and_mode_and_writes_the_csv_and_h_series() {
     let out = necklace(&["bench", dir.join("nowhere").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn segment_cuts_a_dumbbell_in_two_halves_from_found_or_given_loops() {
+    let dir = temp_dir("segment");
+    let mesh = dir.join("dumbbell.off");
+    let path = |p: &PathBuf| p.to_str().unwrap().to_string();
+    assert!(
+        necklace(&["shape", "dumbbell", "--param", "res=40", "-o", &path(&mesh)])
+            .status
+            .success()
+    );
+    // Loops found on the way, the table as JSON.
+    let ply = dir.join("parts.ply");
+    let out = necklace(&[
+        "segment",
+        &path(&mesh),
+        "--handles",
+        "-q",
+        "-o",
+        &path(&ply),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let segments = table["segments"].as_array().unwrap();
+    assert_eq!(segments.len(), 2);
+    let areas: Vec<f64> = segments
+        .iter()
+        .map(|s| s["area"].as_f64().unwrap())
+        .collect();
+    assert!((areas[0] - areas[1]).abs() < 0.01 * areas[0], "{areas:?}");
+    for s in segments {
+        assert_eq!(s["euler"], 1);
+        assert_eq!(s["boundaries"], 1);
+        assert_eq!(s["loops"], serde_json::json!([0]));
+        assert!(s["volume"].as_f64().unwrap() > 0.0);
+    }
+    // The PLY's faces carry their segment.
+    let bytes = std::fs::read(&ply).unwrap();
+    let header = String::from_utf8_lossy(&bytes[..bytes.len().min(400)]).to_string();
+    assert!(header.contains("property int segment"), "{header}");
+
+    // From a run's loops.json, choosing its loop; a loop that is not there is refused.
+    let run = dir.join("run");
+    assert!(
+        necklace(&["loops", &path(&mesh), "--handles", "-q", "-o", &path(&run)])
+            .status
+            .success()
+    );
+    let json = run.join("loops.json");
+    let out = necklace(&[
+        "segment",
+        &path(&mesh),
+        "--loops",
+        &path(&json),
+        "--loop",
+        "0",
+        "-o",
+        &path(&ply),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("into 2 segment(s)"), "{text}");
+    let out = necklace(&[
+        "segment",
+        &path(&mesh),
+        "--loops",
+        &path(&json),
+        "--loop",
+        "3",
+        "-o",
+        &path(&ply),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--loop 3: there are 1 loops"));
+    // The loops of another mesh name vertices or edges it does not have.
+    let other = dir.join("ball.off");
+    assert!(
+        necklace(&["shape", "sphere", "--param", "res=12", "-o", &path(&other)])
+            .status
+            .success()
+    );
+    let out = necklace(&[
+        "segment",
+        &path(&other),
+        "--loops",
+        &path(&json),
+        "-o",
+        &path(&ply),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("another mesh"), "{err}");
+}
+
+#[test]
+fn view_writes_the_page_of_a_run_and_needs_its_mesh() {
+    let dir = temp_dir("view");
+    let mesh = dir.join("dumbbell.off");
+    let path = |p: &PathBuf| p.to_str().unwrap().to_string();
+    assert!(
+        necklace(&["shape", "dumbbell", "--param", "res=40", "-o", &path(&mesh)])
+            .status
+            .success()
+    );
+    let run = dir.join("run");
+    let out = necklace(&[
+        "loops",
+        &path(&mesh),
+        "--handles",
+        "-q",
+        "-o",
+        &path(&run),
+        "--html",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page = std::fs::read_to_string(run.join("view.html")).unwrap();
+    assert!(
+        page.contains("dumbbell.off: "),
+        "the page is titled with the mesh"
+    );
+    std::fs::remove_file(run.join("view.html")).unwrap();
+    // Again from the run's folder: the mesh is the one loops.json names.
+    let out = necklace(&["view", &path(&run)]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("1 loops"));
+    assert!(run.join("view.html").exists());
+    // A mesh the loops are not on is refused.
+    let ball = dir.join("ball.off");
+    assert!(
+        necklace(&["shape", "sphere", "--param", "r=0.1", "-o", &path(&ball)])
+            .status
+            .success()
+    );
+    let out = necklace(&["view", &path(&run), "--mesh", &path(&ball)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("another mesh"));
+}

@@ -36,6 +36,9 @@
 //!   their Hessian and cutting-plane normal.
 //! - [`loops`] (sec. 4.3): plane cut through each saddle, geodesic tightening (strip
 //!   unfolding and funnel), selection with a reason for every drop.
+//! - [`segment`] (after the method; sec. 1 names it as the loops' use): cut the surface
+//!   along loops into parts, with their areas, volumes and topology
+//!   ([`pipeline::segment_along_loops`]).
 //! - [`pipeline`] composes them; [`output`] writes their results; [`render`] draws
 //!   pictures (not in the paper).
 //!
@@ -64,6 +67,7 @@ pub mod output;
 pub mod pipeline;
 pub mod progress;
 pub mod render;
+pub mod segment;
 pub mod shapes;
 pub mod simplify;
 pub mod tet;

@@ -26,11 +26,13 @@
 //! clock, so they add up to the side's time; the run's `seconds` is its own wall clock
 //! (less than the input's time plus both sides').
 //! [`find_critical_points`] (submodule `critical`) is steps 1–4 for one side, what
-//! `necklace critical` runs.
+//! `necklace critical` runs. [`segment_along_loops`] (submodule `segmenting`) cuts the
+//! surface along loops (`segment`), what `necklace segment` runs.
 
 mod critical;
 mod input;
 mod report;
+mod segmenting;
 mod working;
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -60,6 +62,7 @@ pub use report::{
     tracked_points, HomologyCheck, MorseCheck, NeckReport, NeckTimings, SideReport, SimplifyReport,
     StageTimings, TrackedPoint, VolumeField,
 };
+pub use segmenting::segment_along_loops;
 use working::prepare_run;
 
 /// The distance field of the method (paper sec. 3): the exact distance from every

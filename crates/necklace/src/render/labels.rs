@@ -91,6 +91,39 @@ pub fn place_labels(
     placements
 }
 
+/// Where a curve's label may go (canvas pixels), preferred first: beside its
+/// rightmost point, its leftmost, its top and bottom, then 16 points round it.
+pub(super) fn label_anchors(
+    points: &[[f64; 3]],
+    to_canvas: &impl Fn([f64; 3]) -> [f64; 3],
+) -> Vec<[f64; 2]> {
+    let screen: Vec<[f64; 2]> = points
+        .iter()
+        .map(|&p| {
+            let q = to_canvas(p);
+            [q[0], q[1]]
+        })
+        .collect();
+    let extreme = |key: fn(&[f64; 2]) -> f64| {
+        screen
+            .iter()
+            .copied()
+            .max_by(|a, b| key(a).total_cmp(&key(b)))
+    };
+    let mut anchors: Vec<[f64; 2]> = [
+        extreme(|p| p[0]),
+        extreme(|p| -p[0]),
+        extreme(|p| -p[1]),
+        extreme(|p| p[1]),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let step = screen.len().div_ceil(16).max(1);
+    anchors.extend(screen.iter().step_by(step).copied());
+    anchors
+}
+
 /// The first free box centred on rings of growing radius round `anchor` (24 positions
 /// a ring, rings `gap + h` apart), out to the size of `bounds`.
 fn ring_search(

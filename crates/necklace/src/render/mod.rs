@@ -31,7 +31,7 @@ use serde::Serialize;
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::mesh::SurfaceMesh;
-use labels::{place_labels, LabelRequest};
+use labels::{label_anchors, place_labels, LabelRequest};
 use raster::{Canvas, Rgb};
 
 /// A direction to look from.
@@ -670,36 +670,6 @@ fn draw_view(
 /// Font pixels per character pixel for a view `side` pixels wide (before supersampling).
 fn text_scale(side: f64) -> usize {
     (side / 220.0).round().max(1.0) as usize
-}
-
-/// Where a curve's label may go (canvas pixels), preferred first: beside its
-/// rightmost point, its leftmost, its top and bottom, then 16 points round it.
-fn label_anchors(points: &[[f64; 3]], to_canvas: &impl Fn([f64; 3]) -> [f64; 3]) -> Vec<[f64; 2]> {
-    let screen: Vec<[f64; 2]> = points
-        .iter()
-        .map(|&p| {
-            let q = to_canvas(p);
-            [q[0], q[1]]
-        })
-        .collect();
-    let extreme = |key: fn(&[f64; 2]) -> f64| {
-        screen
-            .iter()
-            .copied()
-            .max_by(|a, b| key(a).total_cmp(&key(b)))
-    };
-    let mut anchors: Vec<[f64; 2]> = [
-        extreme(|p| p[0]),
-        extreme(|p| -p[0]),
-        extreme(|p| -p[1]),
-        extreme(|p| p[1]),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    let step = screen.len().div_ceil(16).max(1);
-    anchors.extend(screen.iter().step_by(step).copied());
-    anchors
 }
 
 /// A picture is written as PNG only: refuse another extension (PNG bytes in a `.jpg`

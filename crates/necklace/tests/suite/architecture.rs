@@ -19,7 +19,7 @@ const SERVICES: &[&str] = &["distance"];
 /// Modules that may import everything; no other module imports them.
 const COMPOSERS: &[&str] = &["pipeline", "output"];
 const STAGES: &[&str] = &[
-    "io", "shapes", "simplify", "volume", "morse", "loops", "render",
+    "io", "shapes", "simplify", "volume", "morse", "loops", "segment", "render",
 ];
 
 /// Third-party crates and the modules that may name them, with their submodules

@@ -567,6 +567,7 @@ fn check_membranes(surface: &SurfaceMesh, report: &NeckReport, name: &str) {
     let files = necklace::output::OutputOptions {
         picture: None,
         volume: false,
+        html: false,
     };
     necklace::output::write_run(&dir, surface, report, &files, None).unwrap();
     let path = dir.join("membranes.ply");

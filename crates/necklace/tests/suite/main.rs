@@ -13,6 +13,7 @@ mod loops;
 mod mesh_report;
 mod morse;
 mod render;
+mod segment;
 mod shapes;
 mod shared_meshes;
 mod simplify;

@@ -54,6 +54,7 @@ fn a_rendered_dumbbell_shows_the_handle_colour_at_its_neck_and_not_at_its_balls(
             ..RenderOptions::default()
         }),
         volume: false,
+        html: false,
     };
     let written = output::write_run(&dir, &surface, &report, &files, None).unwrap();
     assert!(written.contains(&dir.join("view.png")));
@@ -275,6 +276,7 @@ fn a_run_writes_every_file_with_the_documented_fields() {
     let files = OutputOptions {
         picture: None,
         volume: true,
+        html: true,
     };
     output::write_run(&dir, &surface, &report, &files, None).unwrap();
 
@@ -305,6 +307,18 @@ fn a_run_writes_every_file_with_the_documented_fields() {
     let saddles = output::read_points_json(dir.join("loops.json")).unwrap();
     let selected: usize = report.sides.iter().map(|s| s.saddles.len()).sum();
     assert_eq!(saddles.len(), selected);
+
+    // view.html: one page with the data in it, one row of data per loop, loading
+    // nothing (the browser test in the Python suite drives it).
+    let page = std::fs::read_to_string(dir.join("view.html")).unwrap();
+    let start = page.find("id=\"necklace-data\">").unwrap() + "id=\"necklace-data\">".len();
+    let end = start + page[start..].find("</script>").unwrap();
+    let data: serde_json::Value =
+        serde_json::from_str(&page[start..end].replace("<\\/", "</")).unwrap();
+    assert_eq!(data["loops"].as_array().unwrap().len(), report.loops.len());
+    assert!(data["note"].is_null(), "a small surface is not decimated");
+    let positions = data["mesh"]["positions"].as_str().unwrap();
+    assert_eq!(positions.len(), surface.num_vertices() * 12 / 3 * 4);
 
     // loops.ply: a closed edge loop per loop, each edge tagged with its loop.
     let ply = std::fs::read(dir.join("loops.ply")).unwrap();

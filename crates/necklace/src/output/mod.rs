@@ -17,9 +17,14 @@
 //! - `critical.ply`: every critical point at the last smoothing step of each side, with
 //!   `type`, `selected`, `persistence`, `side` and colours (see
 //!   [`critical_point_cloud`]);
+//! - `view.html` (with `html`): the interactive page ([`html_page`]: the surface, the
+//!   loops and saddles in WebGL, a table of the loops, the barcode, a scale slider);
 //! - `view.png` with a picture, and beside it `barcode.png`: one bar per 2-saddle track
 //!   of each side over scale, the necks in their kind's colour; `field.vtu` (volume meshes of both sides with the
 //!   smoothed field and the side per vertex, for ParaView) with the volume kept.
+//!
+//! A segmentation (`necklace segment`): [`write_segmentation`] (the surface cut along
+//! the loops as PLY, each face carrying `segment`) and [`segments_json`].
 //!
 //! Units: the input mesh's; coordinates in its frame. Entry points: [`write_run`],
 //! [`report_json`] and back [`read_report_json`], [`loop_scene`], [`read_loops_json`],
@@ -29,12 +34,17 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
 
+mod html;
+
+pub use html::{html_page, write_html, HtmlSummary, DISPLAY_TRIANGLES};
+
 use crate::error::{Error, ErrorKind, Result};
 use crate::io;
 use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::VertexType;
 use crate::pipeline::{NeckReport, TrackedPoint};
 use crate::render::{self, Curve, Dot, LegendEntry, Mark, RenderOptions, Scene};
+use crate::segment::Segmentation;
 use crate::tet::TetMesh;
 
 /// The version of the JSON written by [`report_json`]; raised when a field changes
@@ -63,6 +73,8 @@ pub struct OutputOptions {
     pub picture: Option<RenderOptions>,
     /// Write `field.vtu` (needs a report made with `keep_volume`). Default false.
     pub volume: bool,
+    /// Write `view.html`, the interactive page ([`html_page`]). Default false.
+    pub html: bool,
 }
 
 /// The report as JSON: `version`, `input` (the file, when given), `units`, then every
@@ -96,6 +108,19 @@ pub fn report_from_json(value: Value) -> Result<NeckReport> {
 pub fn read_report_json(path: impl AsRef<Path>) -> Result<NeckReport> {
     let path = path.as_ref();
     report_from_json(read_json(path)?).map_err(|e| e.in_file(path))
+}
+
+/// A run's `loops.json` read back: the report, and the mesh file it names (`input`),
+/// if any.
+pub fn read_run_json(path: impl AsRef<Path>) -> Result<(NeckReport, Option<PathBuf>)> {
+    let path = path.as_ref();
+    let value = read_json(path)?;
+    let input = value
+        .get("input")
+        .and_then(Value::as_str)
+        .map(PathBuf::from);
+    let report = report_from_json(value).map_err(|e| e.in_file(path))?;
+    Ok((report, input))
 }
 
 /// A loop as drawn: its kind and points.
@@ -220,15 +245,7 @@ pub fn loop_scene<'a>(
             mark: Mark::Dot,
         });
     }
-    let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
-    let title = format!(
-        "{name}: {}, {}, {}, {}",
-        plural(surface.num_vertices(), "vertex"),
-        plural(surface.num_triangles(), "triangle"),
-        plural(count(Side::Inside), "handle"),
-        plural(count(Side::Outside), "tunnel"),
-    )
-    .replace("vertexs", "vertices");
+    let title = title(name, surface, count(Side::Inside), count(Side::Outside));
     Scene {
         title: Some(title),
         mesh: surface,
@@ -251,6 +268,42 @@ pub fn loop_scene<'a>(
             .collect(),
         legend,
     }
+}
+
+/// Write a segmentation as binary PLY: the refined surface (the loops are edges of it),
+/// each face carrying `segment` (its segment's id).
+pub fn write_segmentation(path: &Path, segmentation: &Segmentation) -> Result<()> {
+    let labels: Vec<i32> = segmentation
+        .segment_of
+        .iter()
+        .map(|&s| i32::try_from(s).unwrap_or(i32::MAX))
+        .collect();
+    io::write_labelled_mesh_ply(path, &segmentation.mesh, "segment", &labels)
+}
+
+/// The segments as JSON: `{"segments": [...]}` with each [`Segment`](crate::segment::Segment)'s fields
+/// (`docs/output.md`).
+pub fn segments_json(segmentation: &Segmentation) -> Result<Value> {
+    let segments = serde_json::to_value(&segmentation.segments).map_err(|e| {
+        Error::new(
+            ErrorKind::Unsupported,
+            format!("cannot encode the segments: {e}"),
+        )
+    })?;
+    Ok(json!({ "segments": segments }))
+}
+
+/// The title of a picture or page: the mesh's name and its counts, and the loops'.
+fn title(name: &str, surface: &SurfaceMesh, handles: usize, tunnels: usize) -> String {
+    let plural =
+        |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+    format!(
+        "{name}: {}, {}, {}, {}",
+        plural(surface.num_vertices(), "vertex", "vertices"),
+        plural(surface.num_triangles(), "triangle", "triangles"),
+        plural(handles, "handle", "handles"),
+        plural(tunnels, "tunnel", "tunnels")
+    )
 }
 
 fn write_text(path: &Path, text: &str) -> Result<()> {
@@ -329,6 +382,16 @@ pub fn write_run(
             image.write_png(&path)?;
             written.push(path);
         }
+    }
+
+    if options.html {
+        let path = dir.join("view.html");
+        let name = input.and_then(Path::file_name).map_or_else(
+            || "surface".to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        write_html(&path, &name, surface, report)?;
+        written.push(path);
     }
 
     if options.volume {
