@@ -22,7 +22,8 @@ use crate::error::{Error, Result};
 use crate::geom::{add, cross, dot, lerp, norm, scale, sub};
 use crate::mesh::SurfaceMesh;
 
-use super::{sorted, CurvePoint};
+use super::{sorted, CurvePoint, EdgeFaces};
+use crate::mesh::Csr;
 
 /// What [`refine`] returns.
 pub(super) struct Refined {
@@ -41,19 +42,20 @@ struct Chord {
 }
 
 /// Insert the (checked) curves into `surface` (see the module doc).
-pub(super) fn refine(surface: &SurfaceMesh, curves: &[Vec<CurvePoint>]) -> Result<Refined> {
+pub(super) fn refine(
+    surface: &SurfaceMesh,
+    edges: &EdgeFaces,
+    curves: &[Vec<CurvePoint>],
+) -> Result<Refined> {
     let mut positions = surface.positions.clone();
-    let mut faces_at_vertex: Vec<Vec<u32>> = vec![Vec::new(); surface.num_vertices()];
-    let mut faces_at_edge: HashMap<[u32; 2], Vec<u32>> = HashMap::new();
-    for (f, t) in surface.triangles.iter().enumerate() {
-        for k in 0..3 {
-            faces_at_vertex[t[k] as usize].push(f as u32);
-            faces_at_edge
-                .entry(sorted([t[k], t[(k + 1) % 3]]))
-                .or_default()
-                .push(f as u32);
-        }
-    }
+    let faces_at_vertex = Csr::new(
+        surface.num_vertices(),
+        surface
+            .triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(f, t)| t.iter().map(move |&v| (v, f as u32))),
+    );
 
     // Points on edges: one vertex per (edge, t), in the order the curves reach them.
     let mut on_edge: BTreeMap<[u32; 2], Vec<(f64, u32)>> = BTreeMap::new();
@@ -94,20 +96,21 @@ pub(super) fn refine(surface: &SurfaceMesh, curves: &[Vec<CurvePoint>]) -> Resul
             if a == b {
                 continue;
             }
-            if let Some(edge) = common_edge(p, q, &faces_at_edge) {
+            if let Some(edge) = common_edge(p, q, edges) {
                 let (t0, t1) = (param_on(p, edge), param_on(q, edge));
                 for piece in pieces_between(edge, &on_edge, t0.min(t1), t0.max(t1)) {
                     cut_edges.entry(piece).or_default().push(i);
                 }
                 continue;
             }
-            let faces = |p: CurvePoint| -> &[u32] {
+            let faces = |p: CurvePoint| -> Vec<u32> {
                 match p {
-                    CurvePoint::Vertex(v) => &faces_at_vertex[v as usize],
-                    CurvePoint::Edge { edge, .. } => &faces_at_edge[&edge],
+                    CurvePoint::Vertex(v) => faces_at_vertex.get(v as usize).to_vec(),
+                    CurvePoint::Edge { edge, .. } => edges.faces(edge).collect(),
                 }
             };
-            let Some(&f) = faces(p).iter().filter(|f| faces(q).contains(f)).min() else {
+            let (fp, fq) = (faces(p), faces(q));
+            let Some(&f) = fp.iter().filter(|f| fq.contains(f)).min() else {
                 return Err(Error::invalid_argument(format!(
                     "loop {i}: points {k} and {} are on no common triangle: a loop must cross the mesh from triangle to neighbouring triangle",
                     (k + 1) % n
@@ -170,11 +173,7 @@ pub(super) fn refine(surface: &SurfaceMesh, curves: &[Vec<CurvePoint>]) -> Resul
 }
 
 /// The mesh edge both points lie on (a vertex lies on the edges at it), if any.
-fn common_edge(
-    p: CurvePoint,
-    q: CurvePoint,
-    edges: &HashMap<[u32; 2], Vec<u32>>,
-) -> Option<[u32; 2]> {
+fn common_edge(p: CurvePoint, q: CurvePoint, edges: &EdgeFaces) -> Option<[u32; 2]> {
     match (p, q) {
         (CurvePoint::Edge { edge: e, .. }, CurvePoint::Edge { edge, .. }) => {
             (e == edge).then_some(e)
@@ -185,7 +184,7 @@ fn common_edge(
         }
         (CurvePoint::Vertex(u), CurvePoint::Vertex(v)) => {
             let e = sorted([u, v]);
-            edges.contains_key(&e).then_some(e)
+            edges.contains(e).then_some(e)
         }
     }
 }

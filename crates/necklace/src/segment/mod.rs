@@ -28,7 +28,7 @@
 
 mod arrangement;
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeSet, HashMap, HashSet};
 
 use serde::{Deserialize, Serialize};
 
@@ -92,15 +92,17 @@ pub struct Segmentation {
 /// (see the module doc). Errors name the first curve point that is not on the mesh or
 /// not on a triangle with the next one.
 pub fn segment(surface: &SurfaceMesh, curves: &[Vec<CurvePoint>]) -> Result<Segmentation> {
-    let curves = check_curves(surface, curves)?;
+    let input_edges = EdgeFaces::new(surface);
+    let curves = check_curves(surface, &input_edges, curves)?;
     let Refined {
         mesh,
         parent,
         cut_edges,
-    } = refine(surface, &curves)?;
-    let segment_of = group(&mesh, &cut_edges);
+    } = refine(surface, &input_edges, &curves)?;
+    let edges = EdgeFaces::new(&mesh);
+    let segment_of = group(&mesh, &edges, &cut_edges);
     let outward = surface.signed_volume() >= 0.0;
-    let segments = measure(&mesh, &segment_of, &cut_edges, outward);
+    let segments = measure(&mesh, &edges, &segment_of, &cut_edges, outward);
     Ok(Segmentation {
         mesh,
         segment_of,
@@ -111,13 +113,12 @@ pub fn segment(surface: &SurfaceMesh, curves: &[Vec<CurvePoint>]) -> Result<Segm
 
 /// Each curve point as a vertex, or an edge point strictly inside its edge with the
 /// edge's smaller vertex first; an error for a point off the mesh.
-fn check_curves(surface: &SurfaceMesh, curves: &[Vec<CurvePoint>]) -> Result<Vec<Vec<CurvePoint>>> {
+fn check_curves(
+    surface: &SurfaceMesh,
+    edges: &EdgeFaces,
+    curves: &[Vec<CurvePoint>],
+) -> Result<Vec<Vec<CurvePoint>>> {
     let n = surface.num_vertices() as u32;
-    let edges: BTreeSet<[u32; 2]> = surface
-        .triangles
-        .iter()
-        .flat_map(|t| (0..3).map(move |k| sorted([t[k], t[(k + 1) % 3]])))
-        .collect();
     curves
         .iter()
         .enumerate()
@@ -137,7 +138,7 @@ fn check_curves(surface: &SurfaceMesh, curves: &[Vec<CurvePoint>]) -> Result<Vec
                         "loop {i}, point {k}: vertex {v} is not in the mesh ({n} vertices): are these the loops of another mesh?"
                     ))),
                     CurvePoint::Edge { edge, t } => {
-                        if !edges.contains(&sorted(edge)) {
+                        if !edges.contains(sorted(edge)) {
                             return Err(Error::invalid_argument(format!(
                                 "loop {i}, point {k}: {}–{} is not an edge of the mesh: are these the loops of another mesh?",
                                 edge[0], edge[1]
@@ -173,18 +174,18 @@ fn sorted([a, b]: [u32; 2]) -> [u32; 2] {
 
 /// Segment of each triangle: components across edges that are not cut, numbered by
 /// their first triangle.
-fn group(mesh: &SurfaceMesh, cut_edges: &HashMap<[u32; 2], Vec<usize>>) -> Vec<u32> {
-    let faces_of = edge_faces(mesh);
+fn group(
+    mesh: &SurfaceMesh,
+    edges: &EdgeFaces,
+    cut_edges: &HashMap<[u32; 2], Vec<usize>>,
+) -> Vec<u32> {
     let mut parent: Vec<usize> = (0..mesh.num_triangles()).collect();
-    let mut keys: Vec<&[u32; 2]> = faces_of.keys().collect();
-    keys.sort_unstable();
-    for e in keys {
-        if cut_edges.contains_key(e) {
+    for (e, faces) in edges.runs() {
+        if cut_edges.contains_key(&e) {
             continue;
         }
-        let faces = &faces_of[e];
         for w in faces.windows(2) {
-            crate::mesh::union(&mut parent, w[0] as usize, w[1] as usize);
+            crate::mesh::union(&mut parent, w[0].1 as usize, w[1].1 as usize);
         }
     }
     let mut id = HashMap::new();
@@ -197,23 +198,58 @@ fn group(mesh: &SurfaceMesh, cut_edges: &HashMap<[u32; 2], Vec<usize>>) -> Vec<u
         .collect()
 }
 
-/// The triangles at each edge (sorted vertex pair), in triangle order.
-fn edge_faces(mesh: &SurfaceMesh) -> HashMap<[u32; 2], Vec<u32>> {
-    let mut map: HashMap<[u32; 2], Vec<u32>> = HashMap::new();
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            map.entry(sorted([t[k], t[(k + 1) % 3]]))
-                .or_default()
-                .push(f as u32);
-        }
+/// The triangles at each edge: every (edge, triangle) pair sorted by edge then triangle,
+/// edges as sorted vertex pairs packed in a `u64`. One sort instead of a map of lists
+/// (a dense surface has millions of edges).
+pub(crate) struct EdgeFaces {
+    pairs: Vec<(u64, u32)>,
+}
+
+impl EdgeFaces {
+    pub(crate) fn new(mesh: &SurfaceMesh) -> EdgeFaces {
+        use rayon::prelude::*;
+        let mut pairs: Vec<(u64, u32)> = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(f, t)| (0..3).map(move |k| (key(sorted([t[k], t[(k + 1) % 3]])), f as u32)))
+            .collect();
+        pairs.par_sort_unstable();
+        EdgeFaces { pairs }
     }
-    map
+
+    /// The triangles at `edge` (sorted), in triangle order; empty if it is no edge.
+    pub(crate) fn faces(&self, edge: [u32; 2]) -> impl Iterator<Item = u32> + '_ {
+        let k = key(edge);
+        let start = self.pairs.partition_point(|p| p.0 < k);
+        self.pairs[start..]
+            .iter()
+            .take_while(move |p| p.0 == k)
+            .map(|p| p.1)
+    }
+
+    /// Whether `edge` (sorted) is an edge.
+    pub(crate) fn contains(&self, edge: [u32; 2]) -> bool {
+        self.faces(edge).next().is_some()
+    }
+
+    /// Each edge with its triangles, in edge order.
+    fn runs(&self) -> impl Iterator<Item = ([u32; 2], &[(u64, u32)])> + '_ {
+        self.pairs
+            .chunk_by(|a, b| a.0 == b.0)
+            .map(|run| ([(run[0].0 >> 32) as u32, run[0].0 as u32], run))
+    }
+}
+
+fn key([a, b]: [u32; 2]) -> u64 {
+    (u64::from(a) << 32) | u64::from(b)
 }
 
 /// Area, χ and boundaries of each segment cut open along the cut edges, its curves, and
 /// its capped volume.
 fn measure(
     mesh: &SurfaceMesh,
+    edges: &EdgeFaces,
     segment_of: &[u32],
     cut_edges: &HashMap<[u32; 2], Vec<usize>>,
     outward: bool,
@@ -223,7 +259,6 @@ fn measure(
         .map(|&s| s as usize + 1)
         .max()
         .unwrap_or(0);
-    let faces_of = edge_faces(mesh);
     // Corners (3f + k) joined across uncut edges within a segment: the vertex copies
     // of the segment cut open.
     let mut corner: Vec<usize> = (0..3 * mesh.num_triangles()).collect();
@@ -234,17 +269,15 @@ fn measure(
             .unwrap_or(0);
         3 * f as usize + k
     };
-    let mut keys: Vec<&[u32; 2]> = faces_of.keys().collect();
-    keys.sort_unstable();
-    for e in &keys {
-        if cut_edges.contains_key(*e) {
+    for (e, faces) in edges.runs() {
+        if cut_edges.contains_key(&e) {
             continue;
         }
-        let faces = &faces_of[*e];
         for w in faces.windows(2) {
-            if segment_of[w[0] as usize] == segment_of[w[1] as usize] {
-                for &v in e.iter() {
-                    crate::mesh::union(&mut corner, corner_of(w[0], v), corner_of(w[1], v));
+            let (f, g) = (w[0].1, w[1].1);
+            if segment_of[f as usize] == segment_of[g as usize] {
+                for v in e {
+                    crate::mesh::union(&mut corner, corner_of(f, v), corner_of(g, v));
                 }
             }
         }
@@ -265,7 +298,14 @@ fn measure(
             loops: Vec::new(),
         })
         .collect();
-    let mut copies: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); count];
+    // Edges with one triangle (an open input's boundary).
+    let open_edges: HashSet<[u32; 2]> = edges
+        .runs()
+        .filter(|(_, faces)| faces.len() == 1)
+        .map(|(e, _)| e)
+        .collect();
+    // Vertex copies: one per class of corners, counted at its root.
+    let mut copies = vec![0i64; count];
     let mut half_edges = vec![0i64; count];
     let mut boundary_half_edges = vec![0i64; count];
     // Boundary half-edges (a → b in triangle f) by the vertex copy they start from.
@@ -281,12 +321,14 @@ fn measure(
             *v += dot(a, cross(b, c)) / 6.0;
         }
         for k in 0..3 {
-            copies[s].insert(roots[3 * f + k]);
+            if roots[3 * f + k] as usize == 3 * f + k {
+                copies[s] += 1;
+            }
             half_edges[s] += 1;
             let (from, to) = (t[k], t[(k + 1) % 3]);
             let e = sorted([from, to]);
             let cut = cut_edges.get(&e);
-            let open = faces_of[&e].len() == 1;
+            let open = open_edges.contains(&e);
             if cut.is_some() || open {
                 boundary_half_edges[s] += 1;
                 if let Some(curves) = cut {
@@ -304,8 +346,8 @@ fn measure(
         seg.loops.sort_unstable();
         seg.loops.dedup();
         // Uncut edges are shared by two half-edges of the segment, cut ones are not.
-        let edges = (half_edges[s] - boundary_half_edges[s]) / 2 + boundary_half_edges[s];
-        seg.euler = copies[s].len() as i64 - edges + seg.triangles as i64;
+        let edge_count = (half_edges[s] - boundary_half_edges[s]) / 2 + boundary_half_edges[s];
+        seg.euler = copies[s] - edge_count + seg.triangles as i64;
         let (cycles, caps) = trace_boundaries(mesh, &boundary_from[s]);
         seg.boundaries = cycles;
         seg.genus = (2 - seg.euler - cycles as i64) / 2;
