@@ -1,7 +1,8 @@
 //! `view.html`: one self-contained page to turn the shape round, look at its loops and
 //! ask what each is (issue 19). No network at view time: the data (the surface, the
 //! loops, the saddles, the barcode) is embedded as JSON, the surface's arrays as
-//! base64 little-endian `Float32` / `Uint32`, and the WebGL code is our own
+//! base64 little-endian `Float32` / `Uint32`, every coordinate relative to the
+//! surface's bounding-box centre (`offset`), and the WebGL code is our own
 //! (`viewer.html`, no library). A surface above [`DISPLAY_TRIANGLES`] is decimated for
 //! display (the `simplify` stage, which keeps its topology), and the page says so.
 //!
@@ -94,11 +95,16 @@ fn page_data(name: &str, surface: &SurfaceMesh, shown: &SurfaceMesh, report: &Ne
     let count = |kind: Side| report.loops.iter().filter(|l| l.kind == kind).count();
     let title = super::title(name, surface, count(Side::Inside), count(Side::Outside));
     let note = display_note(surface, shown);
+    // Coordinates about the box's centre: single precision far from the origin would
+    // round a small mesh's vertices visibly.
+    let (lo, hi) = surface.bounding_box().unwrap_or(([0.0; 3], [0.0; 3]));
+    let centre: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+    let local = |p: [f64; 3]| -> [f64; 3] { std::array::from_fn(|k| p[k] - centre[k]) };
     let positions: Vec<f32> = shown
         .positions
         .iter()
-        .flatten()
-        .map(|&x| x as f32)
+        .flat_map(|&p| local(p))
+        .map(|x| x as f32)
         .collect();
     let triangles: Vec<u32> = shown.triangles.iter().flatten().copied().collect();
     let loops: Vec<Value> = report
@@ -115,10 +121,10 @@ fn page_data(name: &str, surface: &SurfaceMesh, shown: &SurfaceMesh, report: &Ne
                 "birth_scale": l.birth_scale,
                 "death_scale": l.death_scale,
                 "bulge": l.bulge,
-                "center": l.center,
+                "center": local(l.center),
                 "radius": l.radius,
-                "saddle": l.saddle,
-                "points": l.points.iter().flatten().collect::<Vec<_>>(),
+                "saddle": local(l.saddle),
+                "points": l.points.iter().flat_map(|&p| local(p)).collect::<Vec<_>>(),
             })
         })
         .collect();
@@ -154,7 +160,9 @@ fn page_data(name: &str, surface: &SurfaceMesh, shown: &SurfaceMesh, report: &Ne
             "triangles": base64(&triangles.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>()),
         },
         "loops": loops,
-        "saddles": report.loops.iter().map(|l| l.saddle).collect::<Vec<_>>(),
+        "saddles": report.loops.iter().map(|l| local(l.saddle)).collect::<Vec<_>>(),
+        // What was subtracted from every coordinate above.
+        "offset": centre,
         "bars": bars,
         "colors": {
             "handle": color(HANDLE_COLOR),

@@ -311,6 +311,9 @@ fn measure(
     // Boundary half-edges (a → b in triangle f) by the vertex copy they start from.
     let mut boundary_from: Vec<HashMap<u32, (u32, u32)>> = vec![HashMap::new(); count];
     let mut traceable = vec![true; count];
+    // Volumes are taken about a point of the mesh, not the origin: a closed surface's is
+    // the same about any point, and far from the origin the products would cancel.
+    let origin = mesh.positions.first().copied().unwrap_or([0.0; 3]);
     for (f, t) in mesh.triangles.iter().enumerate() {
         let s = segment_of[f] as usize;
         let seg = &mut segments[s];
@@ -318,6 +321,7 @@ fn measure(
         let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
         seg.area += 0.5 * crate::geom::norm(cross(sub(b, a), sub(c, a)));
         if let Some(v) = &mut seg.volume {
+            let (a, b, c) = (sub(a, origin), sub(b, origin), sub(c, origin));
             *v += dot(a, cross(b, c)) / 6.0;
         }
         for k in 0..3 {
@@ -348,7 +352,7 @@ fn measure(
         // Uncut edges are shared by two half-edges of the segment, cut ones are not.
         let edge_count = (half_edges[s] - boundary_half_edges[s]) / 2 + boundary_half_edges[s];
         seg.euler = copies[s] - edge_count + seg.triangles as i64;
-        let (cycles, caps) = trace_boundaries(mesh, &boundary_from[s]);
+        let (cycles, caps) = trace_boundaries(mesh, origin, &boundary_from[s]);
         seg.boundaries = cycles;
         seg.genus = (2 - seg.euler - cycles as i64) / 2;
         seg.volume = match (seg.volume, caps) {
@@ -364,8 +368,12 @@ fn measure(
 
 /// The boundary cycles of a segment from its boundary half-edges (keyed by the vertex
 /// copy they start from, giving the vertex and copy they end at): how many, and the
-/// volume their centroid fans add (`None` where a cycle does not close).
-fn trace_boundaries(mesh: &SurfaceMesh, from: &HashMap<u32, (u32, u32)>) -> (usize, Option<f64>) {
+/// volume their centroid fans add about `origin` (`None` where a cycle does not close).
+fn trace_boundaries(
+    mesh: &SurfaceMesh,
+    origin: [f64; 3],
+    from: &HashMap<u32, (u32, u32)>,
+) -> (usize, Option<f64>) {
     let mut starts: Vec<u32> = from.keys().copied().collect();
     starts.sort_unstable();
     let mut done: BTreeSet<u32> = BTreeSet::new();
@@ -406,7 +414,8 @@ fn trace_boundaries(mesh: &SurfaceMesh, from: &HashMap<u32, (u32, u32)>) -> (usi
         if let Some(total) = &mut caps {
             for i in 0..points.len() {
                 let (p, q) = (points[i], points[(i + 1) % points.len()]);
-                *total += dot(centroid, cross(q, p)) / 6.0;
+                let (c, p, q) = (sub(centroid, origin), sub(p, origin), sub(q, origin));
+                *total += dot(c, cross(q, p)) / 6.0;
             }
         }
     }

@@ -198,3 +198,33 @@ fn points_off_the_mesh_are_refused_with_the_loop_and_point() {
     let err = segment(&mesh, &[jump]).unwrap_err().to_string();
     assert!(err.contains("no common triangle"), "{err}");
 }
+
+#[test]
+fn far_from_the_origin_the_parts_are_measured_the_same() {
+    // The band between two meridians, the torus moved 10⁴ away: the same areas,
+    // volumes and topology (volumes are taken about a point of the mesh).
+    let near = torus(1.0, 0.3, 60, 24);
+    let mut far = near.clone();
+    for p in &mut far.positions {
+        *p = add(*p, [1e4, -2e4, 3e4]);
+    }
+    let cut = |mesh: &SurfaceMesh| {
+        segment(mesh, &[meridian(&near, 0.31), meridian(&near, 1.13)]).unwrap()
+    };
+    let (a, b) = (cut(&near), cut(&far));
+    assert_eq!(a.segments.len(), b.segments.len());
+    for (x, y) in a.segments.iter().zip(&b.segments) {
+        assert_eq!(
+            (x.euler, x.boundaries, &x.loops),
+            (y.euler, y.boundaries, &y.loops)
+        );
+        assert!(
+            (x.area - y.area).abs() < 1e-8 * x.area,
+            "{} {}",
+            x.area,
+            y.area
+        );
+        let (vx, vy) = (x.volume.unwrap(), y.volume.unwrap());
+        assert!((vx - vy).abs() < 1e-8 * vx.abs(), "{vx} {vy}");
+    }
+}
