@@ -577,32 +577,51 @@ fn bench_prints_a_row_per_model_and_mode_and_writes_the_csv_and_h_series() {
     assert_eq!(out.status.code(), Some(2));
 }
 
+/// Run necklace and assert it succeeded (its stderr in the failure message).
+fn succeeded(args: &[&str]) -> Output {
+    let out = necklace(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Run necklace and assert it refused the input (status 2) saying `needle`.
+fn refused_with(args: &[&str], needle: &str) {
+    let out = necklace(args);
+    assert_eq!(out.status.code(), Some(2), "{args:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(needle), "'{needle}' not in: {err}");
+}
+
+fn path(p: &std::path::Path) -> String {
+    p.to_str().unwrap().to_string()
+}
+
+/// A coarse analytic dumbbell in `dir`, and a run of its handles in `dir/run` (with
+/// the page when `html`).
+fn dumbbell_run(dir: &std::path::Path, html: bool) -> (PathBuf, PathBuf) {
+    let mesh = dir.join("dumbbell.off");
+    succeeded(&["shape", "dumbbell", "--param", "res=40", "-o", &path(&mesh)]);
+    let run = dir.join("run");
+    let (m, r) = (path(&mesh), path(&run));
+    let mut args = vec!["loops", m.as_str(), "--handles", "-q", "-o", r.as_str()];
+    if html {
+        args.push("--html");
+    }
+    succeeded(&args);
+    (mesh, run)
+}
+
 #[test]
 fn segment_cuts_a_dumbbell_in_two_halves_from_found_or_given_loops() {
     let dir = temp_dir("segment");
-    let mesh = dir.join("dumbbell.off");
-    let path = |p: &PathBuf| p.to_str().unwrap().to_string();
-    assert!(
-        necklace(&["shape", "dumbbell", "--param", "res=40", "-o", &path(&mesh)])
-            .status
-            .success()
-    );
+    let (mesh, run) = dumbbell_run(&dir, false);
+    let (mesh, ply) = (path(&mesh), path(&dir.join("parts.ply")));
     // Loops found on the way, the table as JSON.
-    let ply = dir.join("parts.ply");
-    let out = necklace(&[
-        "segment",
-        &path(&mesh),
-        "--handles",
-        "-q",
-        "-o",
-        &path(&ply),
-        "--json",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeeded(&["segment", &mesh, "--handles", "-q", "-o", &ply, "--json"]);
     let table: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let segments = table["segments"].as_array().unwrap();
     assert_eq!(segments.len(), 2);
@@ -623,87 +642,31 @@ fn segment_cuts_a_dumbbell_in_two_halves_from_found_or_given_loops() {
     assert!(header.contains("property int segment"), "{header}");
 
     // From a run's loops.json, choosing its loop; a loop that is not there is refused.
-    let run = dir.join("run");
-    assert!(
-        necklace(&["loops", &path(&mesh), "--handles", "-q", "-o", &path(&run)])
-            .status
-            .success()
-    );
-    let json = run.join("loops.json");
-    let out = necklace(&[
-        "segment",
-        &path(&mesh),
-        "--loops",
-        &path(&json),
-        "--loop",
-        "0",
-        "-o",
-        &path(&ply),
+    let json = path(&run.join("loops.json"));
+    let out = succeeded(&[
+        "segment", &mesh, "--loops", &json, "--loop", "0", "-o", &ply,
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("into 2 segment(s)"), "{text}");
-    let out = necklace(&[
-        "segment",
-        &path(&mesh),
-        "--loops",
-        &path(&json),
-        "--loop",
-        "3",
-        "-o",
-        &path(&ply),
-    ]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--loop 3: there are 1 loops"));
-    // The loops of another mesh name vertices or edges it does not have.
-    let other = dir.join("ball.off");
-    assert!(
-        necklace(&["shape", "sphere", "--param", "res=12", "-o", &path(&other)])
-            .status
-            .success()
+    refused_with(
+        &[
+            "segment", &mesh, "--loops", &json, "--loop", "3", "-o", &ply,
+        ],
+        "--loop 3: there are 1 loops",
     );
-    let out = necklace(&[
-        "segment",
-        &path(&other),
-        "--loops",
-        &path(&json),
-        "-o",
-        &path(&ply),
-    ]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("another mesh"), "{err}");
+    // The loops of another mesh name vertices or edges it does not have.
+    let other = path(&dir.join("ball.off"));
+    succeeded(&["shape", "sphere", "--param", "res=12", "-o", &other]);
+    refused_with(
+        &["segment", &other, "--loops", &json, "-o", &ply],
+        "another mesh",
+    );
 }
 
 #[test]
 fn view_writes_the_page_of_a_run_and_needs_its_mesh() {
     let dir = temp_dir("view");
-    let mesh = dir.join("dumbbell.off");
-    let path = |p: &PathBuf| p.to_str().unwrap().to_string();
-    assert!(
-        necklace(&["shape", "dumbbell", "--param", "res=40", "-o", &path(&mesh)])
-            .status
-            .success()
-    );
-    let run = dir.join("run");
-    let out = necklace(&[
-        "loops",
-        &path(&mesh),
-        "--handles",
-        "-q",
-        "-o",
-        &path(&run),
-        "--html",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (_, run) = dumbbell_run(&dir, true);
     let page = std::fs::read_to_string(run.join("view.html")).unwrap();
     assert!(
         page.contains("dumbbell.off: "),
@@ -711,22 +674,11 @@ fn view_writes_the_page_of_a_run_and_needs_its_mesh() {
     );
     std::fs::remove_file(run.join("view.html")).unwrap();
     // Again from the run's folder: the mesh is the one loops.json names.
-    let out = necklace(&["view", &path(&run)]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeeded(&["view", &path(&run)]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("1 loops"));
     assert!(run.join("view.html").exists());
     // A mesh the loops are not on is refused.
-    let ball = dir.join("ball.off");
-    assert!(
-        necklace(&["shape", "sphere", "--param", "r=0.1", "-o", &path(&ball)])
-            .status
-            .success()
-    );
-    let out = necklace(&["view", &path(&run), "--mesh", &path(&ball)]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("another mesh"));
+    let ball = path(&dir.join("ball.off"));
+    succeeded(&["shape", "sphere", "--param", "r=0.1", "-o", &ball]);
+    refused_with(&["view", &path(&run), "--mesh", &ball], "another mesh");
 }

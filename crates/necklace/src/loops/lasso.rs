@@ -79,16 +79,17 @@ pub fn fit_lasso(points: &[[f64; 3]], center: [f64; 3], normal: [f64; 3]) -> Las
         .unwrap_or(fallback);
     let circle_center = add(center, add(scale(u, c[0]), scale(v, c[1])));
     let distance = |p: [f64; 3]| circle_distance(p, circle_center, normal, radius);
+    let at_points: Vec<f64> = points.iter().map(|&p| distance(p)).collect();
     let mut max_deviation: f64 = 0.0;
     let mut sum = 0.0;
     let mut total = 0.0;
     for i in 0..n {
         let (a, b) = (points[i], points[(i + 1) % n]);
-        let middle = scale(add(a, b), 0.5);
-        max_deviation = max_deviation.max(distance(a)).max(distance(middle));
-        let w = norm(sub(b, a));
+        let (da, db) = (at_points[i], at_points[(i + 1) % n]);
+        let dm = distance(scale(add(a, b), 0.5));
+        max_deviation = max_deviation.max(da).max(dm);
         // Simpson's rule along the segment: ends and middle.
-        let (da, dm, db) = (distance(a), distance(middle), distance(b));
+        let w = norm(sub(b, a));
         sum += w * (da * da + 4.0 * dm * dm + db * db) / 6.0;
         total += w;
     }
@@ -130,8 +131,8 @@ fn algebraic_circle(points: &[[f64; 2]], weights: &[f64]) -> Option<([f64; 2], f
     (r2 > 0.0 && r2.is_finite()).then(|| (c, r2.sqrt()))
 }
 
-/// Gauss–Newton on `Σ w (|q − c| − r)²` from `start`; at the optimum `r` is the
-/// weighted mean distance to `c`, so each step solves for `c` with `r` eliminated.
+/// Gauss–Newton on `Σ w (|q − c| − r)²` from `start`: each step solves the 3 × 3 normal
+/// equations for the change of the centre and the radius.
 fn geometric_circle(
     points: &[[f64; 2]],
     weights: &[f64],

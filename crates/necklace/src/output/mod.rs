@@ -366,13 +366,14 @@ pub fn write_run(
     io::write_point_cloud(&path, &critical_cloud(report))?;
     written.push(path);
 
+    // The mesh's name, for the picture's and the page's titles.
+    let name = input.and_then(Path::file_name).map_or_else(
+        || "surface".to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
     if let Some(picture) = &options.picture {
         let path = dir.join("view.png");
         let saddles: Vec<[f64; 3]> = report.loops.iter().map(|l| l.saddle).collect();
-        let name = input.and_then(Path::file_name).map_or_else(
-            || "surface".to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        );
         let scene = loop_scene(&name, surface, &curves, &saddles);
         let rendered = render::render(&scene, picture)?;
         rendered.image.write_png(&path)?;
@@ -386,10 +387,6 @@ pub fn write_run(
 
     if options.html {
         let path = dir.join("view.html");
-        let name = input.and_then(Path::file_name).map_or_else(
-            || "surface".to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        );
         write_html(&path, &name, surface, report)?;
         written.push(path);
     }
