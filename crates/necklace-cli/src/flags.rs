@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand};
 use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Preconditioner, Schedule, SolverOptions};
+use necklace::pipeline::InputOptions;
 use necklace::simplify::SimplifyOptions;
 use necklace::volume::{Mesher, VolumeOptions};
 
@@ -33,6 +34,8 @@ pub enum Command {
     Info {
         /// The mesh file.
         mesh: PathBuf,
+        #[command(flatten)]
+        input: InputArgs,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
@@ -45,6 +48,8 @@ pub enum Command {
         /// Mesh the outside shell instead of the inside.
         #[arg(long)]
         exterior: bool,
+        #[command(flatten)]
+        input: InputArgs,
         /// Lattice spacing along the surface (default: bounding-box diagonal / 64).
         #[arg(long, allow_negative_numbers = true)]
         h: Option<f64>,
@@ -248,9 +253,32 @@ pub enum Command {
     },
 }
 
+/// How a mesh file is read into the surface the method works on.
+#[derive(clap::Args)]
+pub struct InputArgs {
+    /// Weld corners closer than this fraction of the bounding-box diagonal into one
+    /// vertex (STL stores each triangle's corners apart; OBJ and PLY repeat positions
+    /// along texture seams).
+    #[arg(long, default_value_t = necklace::pipeline::DEFAULT_WELD, value_name = "FRACTION", allow_negative_numbers = true)]
+    pub weld: f64,
+    /// Keep the vertices as the file gives them (no welding).
+    #[arg(long)]
+    pub no_weld: bool,
+}
+
+impl InputArgs {
+    pub fn options(&self) -> InputOptions {
+        InputOptions {
+            weld: (!self.no_weld).then_some(self.weld),
+        }
+    }
+}
+
 /// The method's settings shared by `critical` and `loops`.
 #[derive(clap::Args)]
 pub struct MethodArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
     /// Smoothing schedule: `scales` classifies over a geometric range of heat times
     /// (from 2h to a quarter of the diagonal); `paper` takes --steps steps of --tau and
     /// classifies from step 10 on, as the paper does.

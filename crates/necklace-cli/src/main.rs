@@ -15,7 +15,7 @@ use necklace::file::{check_output_file, check_output_folder};
 use necklace::loops::LoopOptions;
 use necklace::morse::MorseOptions;
 use necklace::output::OutputOptions;
-use necklace::pipeline::{self};
+use necklace::pipeline::{self, InputOptions};
 use necklace::render::RenderOptions;
 use necklace::shapes::Shape;
 use necklace::simplify::SimplifyOptions;
@@ -84,10 +84,11 @@ pub struct Ui {
 /// Run a command; the text it returns goes to stdout.
 fn run(command: Command, ui: &Ui) -> Result<String> {
     match command {
-        Command::Info { mesh, json } => info(mesh, json),
+        Command::Info { mesh, input, json } => info(mesh, &input.options(), json),
         Command::Volume {
             mesh,
             exterior,
+            input,
             h,
             max_tets,
             mesher,
@@ -100,7 +101,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
                 mesher: mesher.into(),
                 ..VolumeOptions::default()
             };
-            volume(mesh, exterior, &options, output, json)
+            volume(mesh, exterior, &input.options(), &options, output, json)
         }
         Command::Critical {
             mesh,
@@ -111,6 +112,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
         } => critical(
             mesh,
             exterior,
+            &method.input.options(),
             &method.volume(),
             &method.morse(),
             output,
@@ -149,6 +151,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
                 morse: method.morse(),
                 keep_volume: volume,
                 sides_at_once: !one_side_at_a_time,
+                input: method.input.options(),
                 simplify: SimplifyOptions {
                     above: simplify_above,
                     target: simplify_to,
@@ -223,21 +226,27 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
     }
 }
 
-fn info(path: PathBuf, json: bool) -> Result<String> {
-    let mesh = io::read_mesh(&path)?;
-    let report = pipeline::inspect_surface(&mesh);
+fn info(path: PathBuf, input: &InputOptions, json: bool) -> Result<String> {
+    input.check()?;
+    let welded = pipeline::weld_input(io::read_mesh(&path)?, input);
+    let (welding, note) = (welded.welding, welded.note);
+    let report = pipeline::inspect_surface(&welded.mesh);
     if json {
         let mut value = serde_json::to_value(&report).context("encoding the report")?;
         value["file"] = serde_json::Value::String(path.display().to_string());
+        value["welded_vertices"] = welding.merged.into();
+        value["welded_collapsed_faces"] = welding.collapsed_faces.into();
         Ok(serde_json::to_string_pretty(&value)? + "\n")
     } else {
-        Ok(format!("{}\n{report}\n", path.display()))
+        let welded = note.map_or(String::new(), |n| format!("{n}\n"));
+        Ok(format!("{}\n{welded}{report}\n", path.display()))
     }
 }
 
 fn critical(
     path: PathBuf,
     exterior: bool,
+    input: &InputOptions,
     volume_options: &VolumeOptions,
     options: &MorseOptions,
     output: Option<PathBuf>,
@@ -252,8 +261,9 @@ fn critical(
     } else {
         Side::Inside
     };
-    let run = pipeline::find_critical_points(io::read_mesh(&path)?, side, volume_options, options)
-        .map_err(|e| e.in_file(&path))?;
+    let run =
+        pipeline::find_critical_points(io::read_mesh(&path)?, side, input, volume_options, options)
+            .map_err(|e| e.in_file(&path))?;
     print::note(&path, &run.prepared.notes);
     print::warn(&run.prepared.warnings);
     print::warn(&run.volume.warnings);
@@ -423,8 +433,9 @@ fn render(
 
 /// Read a mesh and prepare it for the method (`pipeline::prepare_input`), printing
 /// what was repaired and what is unusual about it.
-pub fn read_prepared(path: &std::path::Path) -> Result<necklace::SurfaceMesh> {
-    let prepared = pipeline::prepare_input(io::read_mesh(path)?).map_err(|e| e.in_file(path))?;
+fn read_prepared(path: &std::path::Path, input: &InputOptions) -> Result<necklace::SurfaceMesh> {
+    let prepared =
+        pipeline::prepare_input_with(io::read_mesh(path)?, input).map_err(|e| e.in_file(path))?;
     print::note(path, &prepared.notes);
     for w in &prepared.warnings {
         eprintln!("necklace: warning: {}: {}", path.display(), printable(w));
@@ -435,6 +446,7 @@ pub fn read_prepared(path: &std::path::Path) -> Result<necklace::SurfaceMesh> {
 fn volume(
     path: PathBuf,
     exterior: bool,
+    input: &InputOptions,
     options: &VolumeOptions,
     output: Option<PathBuf>,
     json: bool,
@@ -443,7 +455,7 @@ fn volume(
         io::check_tet_mesh_name(output)?;
         check_output_file(output)?;
     }
-    let surface = read_prepared(&path)?;
+    let surface = read_prepared(&path, input)?;
     let side = if exterior {
         Side::Outside
     } else {

@@ -77,6 +77,95 @@ fn info_text_names_the_problems_of_an_open_mesh_and_exits_0() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// An ASCII STL of a tetrahedron whose shared corners an exporter wrote apart: `6e-17`
+/// where it means 0, as CAD exporters do.
+const ROUNDED_TETRAHEDRON: &str = "solid t
+facet normal 0 0 0
+outer loop
+vertex 0 0 0
+vertex 0 1 0
+vertex 1 0 0
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 6e-17 0 0
+vertex 1 0 0
+vertex 0 0 1
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 0 6e-17 0
+vertex 0 0 1
+vertex 0 1 0
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 1 0 0
+vertex 0 1 0
+vertex 0 0 1
+endloop
+endfacet
+endsolid t
+";
+
+#[test]
+fn info_welds_corners_an_exporter_wrote_apart_and_says_how_many() {
+    let dir = temp_dir("weld");
+    let path = dir.join("t.stl");
+    std::fs::write(&path, ROUNDED_TETRAHEDRON).unwrap();
+    let file = path.to_str().unwrap();
+    let out = necklace(&["info", file]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("welded 2 corners"), "{text}");
+    assert!(
+        text.contains("watertight yes") && text.contains("genus [0]"),
+        "{text}"
+    );
+    let out = necklace(&["info", file, "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["welded_vertices"], 2);
+    assert_eq!(json["watertight"], true);
+    // Turned off, the cracks stay.
+    let out = necklace(&["info", file, "--no-weld"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        !text.contains("welded") && text.contains("boundary edges"),
+        "{text}"
+    );
+    let out = necklace(&["info", file, "--weld", "-1"]);
+    assert_eq!(out.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_triangle_soup_is_refused_at_once_in_one_line() {
+    let dir = temp_dir("soup");
+    let path = dir.join("soup.obj");
+    let mut obj = String::new();
+    for i in 0..40 {
+        let x = i as f64 * 0.37 % 1.0;
+        let y = i as f64 * 0.61 % 1.0;
+        let z = i as f64 * 0.83 % 1.0;
+        obj.push_str(&format!(
+            "v {x} {y} {z}\nv {} {z} {y}\nv {y} {x} {}\n",
+            x + 0.3,
+            z + 0.2
+        ));
+        obj.push_str(&format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3));
+    }
+    std::fs::write(&path, obj).unwrap();
+    let out = necklace(&["loops", path.to_str().unwrap(), "-q"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("encloses no volume"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 #[test]
 fn unreadable_files_exit_2_with_one_line_on_stderr() {
     let dir = temp_dir("bad");

@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 
 use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Preconditioner, Schedule, SolverOptions};
-use necklace::pipeline::{NeckOptions, NeckReport, TrackedPoint};
+use necklace::pipeline::{InputOptions, NeckOptions, NeckReport, TrackedPoint};
 use necklace::progress::Progress;
 use necklace::simplify::SimplifyOptions;
 use necklace::volume::VolumeOptions;
@@ -154,6 +154,13 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
             ..loops
         },
         keep_volume: option(options, "volume", false)?,
+        input: InputOptions {
+            weld: (!option(options, "no_weld", false)?).then_some(option(
+                options,
+                "weld",
+                necklace::pipeline::DEFAULT_WELD,
+            )?),
+        },
         sides_at_once: !option(
             options,
             "one_side_at_a_time",
@@ -415,6 +422,8 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("one_side_at_a_time", !options.sides_at_once)?;
     out.set_item("simplify_above", options.simplify.above)?;
     out.set_item("simplify_to", options.simplify.target)?;
+    out.set_item("weld", options.input.weld.unwrap_or(0.0))?;
+    out.set_item("no_weld", options.input.weld.is_none())?;
     Ok(out)
 }
 

@@ -406,6 +406,8 @@ def find_necks(
     one_side_at_a_time: bool = False,
     simplify_above: int = 200_000,
     simplify_to: int = 30_000,
+    weld: float = 1e-08,
+    no_weld: bool = False,
     progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> NeckResult:
     """Find the neck loops of a closed triangle mesh.
@@ -451,6 +453,10 @@ def find_necks(
             again and tightened on the input (``to_dict()["simplified"]`` says what
             was done; ``notes`` too).
         simplify_to: how many triangles the simplified copy keeps.
+        weld: corners closer than this fraction of the bounding-box diagonal are
+            welded into one vertex (repeated positions, an exporter's rounding);
+            ``notes`` says how many.
+        no_weld: keep the vertices as given (no welding).
         progress: called as ``progress(stage, done, total)`` at each stage's start
             and end and at most every 0.2 s in between (``total`` 0 when unknown). The
             two sides run at the same time, so their calls interleave; each stage's
@@ -490,6 +496,8 @@ def find_necks(
         one_side_at_a_time=one_side_at_a_time,
         simplify_above=simplify_above,
         simplify_to=simplify_to,
+        weld=weld,
+        no_weld=no_weld,
     )
     if progress is not None and not callable(progress):
         raise NecklaceError("progress: not callable")

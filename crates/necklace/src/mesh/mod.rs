@@ -32,7 +32,7 @@ mod topology;
 
 pub use csr::Csr;
 pub use homology::{z2_rank, HomologyBasis, Z2Basis};
-pub use repair::{orient_consistently, remove_unreferenced, Reorientation};
+pub use repair::{orient_consistently, remove_unreferenced, weld, Reorientation, Welding};
 pub use report::{ComponentReport, MeshReport, MAX_COORDINATE};
 pub use side::Side;
 pub use topology::Topology;

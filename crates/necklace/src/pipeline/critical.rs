@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 
-use super::{distance_field, prepare_input, PreparedSurface};
+use super::{distance_field, prepare_input_with, InputOptions, PreparedSurface};
 use crate::distance::SurfaceDistance;
 use crate::error::Result;
 use crate::mesh::{MeshReport, Side, SurfaceMesh};
@@ -41,17 +41,18 @@ impl CriticalRun {
 }
 
 /// One side of a surface up to its selected 2-saddles: check the options, prepare the
-/// input ([`prepare_input`]), survey the surface and mesh the side
+/// input ([`prepare_input_with`]), survey the surface and mesh the side
 /// (`volume::survey_surface`, `volume::volume_mesh_surveyed`), then
 /// [`critical_points`].
 pub fn find_critical_points(
     mesh: SurfaceMesh,
     side: Side,
+    input_options: &InputOptions,
     volume_options: &VolumeOptions,
     options: &MorseOptions,
 ) -> Result<CriticalRun> {
     options.check()?;
-    let prepared = prepare_input(mesh)?;
+    let prepared = prepare_input_with(mesh, input_options)?;
     let start = std::time::Instant::now();
     let (surface, distance) = (&prepared.mesh, &prepared.distance);
     let survey = survey_surface(surface, distance, &prepared.mesh_report, volume_options)?;

@@ -5,6 +5,10 @@
 //! no triangles, coordinates so large that volumes overflow ([`MAX_COORDINATE`]), all
 //! vertices at one point, a closed surface that encloses no volume (a doubled sheet).
 //! It repairs what has one right answer, each repair a note:
+//! 0. corners closer than [`InputOptions::weld`] times the bounding-box diagonal are
+//!    welded into one vertex (`mesh::weld`: STL stores each triangle's corners apart,
+//!    exporters round, OBJ and PLY duplicate positions along texture seams), and the
+//!    triangles that collapses are removed ([`weld_input`]);
 //! 1. vertices no triangle uses are removed (they would set the bounding box, and with
 //!    it the lattice spacing and the smoothing scales);
 //! 2. faces are turned to agree with their neighbours, per component
@@ -29,10 +33,96 @@ use crate::geom::{norm, sub};
 use crate::io;
 use crate::loops::Seed;
 use crate::mesh::{
-    orient_consistently, remove_unreferenced, MeshReport, Reorientation, Side, SurfaceMesh,
-    MAX_COORDINATE,
+    orient_consistently, remove_unreferenced, weld, MeshReport, Reorientation, Side, SurfaceMesh,
+    Welding, MAX_COORDINATE,
 };
 use crate::tet::{TetMesh, VertexKind};
+
+/// Corners closer than this fraction of the bounding-box diagonal are one point, by
+/// default ([`InputOptions::weld`]): far below any feature the method resolves (the
+/// lattice spacing is 1/64 of the diagonal), far above the rounding of coordinates
+/// written in single precision (about 1e-7 of each coordinate) only where that rounding
+/// is what separates them.
+pub const DEFAULT_WELD: f64 = 1e-8;
+
+/// Options of the input step ([`prepare_input_with`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InputOptions {
+    /// Weld corners closer than this fraction of the bounding-box diagonal into one
+    /// vertex (default [`DEFAULT_WELD`]; `Some(0.0)` welds only equal positions; `None`
+    /// keeps the vertices as given).
+    pub weld: Option<f64>,
+}
+
+impl InputOptions {
+    /// The error for options no input step can use (a negative or non-finite weld
+    /// tolerance).
+    pub fn check(&self) -> Result<()> {
+        match self.weld {
+            Some(w) if !(w.is_finite() && w >= 0.0) => Err(Error::invalid_argument(format!(
+                "weld = {w} must be a fraction of the diagonal, 0 or more (--no-weld turns welding off)"
+            ))),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl Default for InputOptions {
+    fn default() -> Self {
+        InputOptions {
+            weld: Some(DEFAULT_WELD),
+        }
+    }
+}
+
+/// What [`weld_input`] did: the welded mesh, for each of its vertices the input's
+/// index, the counts, and the note that says them (`None` when nothing was merged).
+#[derive(Debug, Clone)]
+pub struct WeldedInput {
+    /// The mesh with the merged vertices removed (the others in their order).
+    pub mesh: SurfaceMesh,
+    /// For each vertex of `mesh`, its index in the input.
+    pub input_vertex: Vec<u32>,
+    /// The counts (all 0 when welding is off or merged nothing).
+    pub welding: Welding,
+    /// One line for the notes, when anything was merged.
+    pub note: Option<String>,
+}
+
+/// Step 0 of the input step: `mesh` with its corners welded as `options` say
+/// (`mesh::weld`), and the note that says how many were merged and how many triangles
+/// collapsed.
+pub fn weld_input(mesh: SurfaceMesh, options: &InputOptions) -> WeldedInput {
+    let unchanged = |mesh: SurfaceMesh, welding: Welding| WeldedInput {
+        input_vertex: (0..mesh.positions.len() as u32).collect(),
+        mesh,
+        welding,
+        note: None,
+    };
+    let Some(relative) = options.weld else {
+        return unchanged(mesh, Welding::default());
+    };
+    let tolerance = relative * mesh.bbox_diagonal();
+    let (welded, input_vertex, what) = weld(&mesh, tolerance);
+    if what.merged == 0 {
+        return unchanged(mesh, what);
+    }
+    let collapsed = match what.collapsed_faces {
+        0 => String::new(),
+        1 => "; removed 1 triangle that it collapsed".into(),
+        n => format!("; removed {n} triangles that it collapsed"),
+    };
+    let note = format!(
+        "welded {} corners into others within {:.3e} ({relative:e} of the bounding-box diagonal; --no-weld keeps them){collapsed}",
+        what.merged, what.tolerance
+    );
+    WeldedInput {
+        mesh: welded,
+        input_vertex,
+        welding: what,
+        note: Some(note),
+    }
+}
 
 /// A surface accepted as input to the method, with what was done to it.
 #[derive(Debug, Clone)]
@@ -49,15 +139,16 @@ pub struct PreparedSurface {
     /// inverted component, or faces that disagreed with their neighbours).
     pub flipped: bool,
     /// The triangles that cross another (sorted, each once; empty for an embedded
-    /// surface). Face indices are those of the input and of `mesh` alike: preparing
-    /// keeps the faces and their order.
+    /// surface), as indices into `mesh`'s faces (the input's, in their order, less the
+    /// ones welding collapsed).
     pub crossing_faces: Vec<u32>,
     /// The distance structure of `mesh`, with its crossing pairs and, when there are
     /// none, the pseudonormal sign ([`SurfaceDistance::of_surface`]): built once, and
     /// shared by every stage of the run.
     pub distance: SurfaceDistance,
     /// For each vertex of `mesh`, its index in the input (the input's vertices that a
-    /// face uses, in their order; faces keep their indices and order).
+    /// face uses after welding, in their order; a welded vertex is the first of those
+    /// merged into it; faces keep their order, less those welding collapsed).
     pub input_vertex: Vec<u32>,
     /// The repairs made, one line each.
     pub notes: Vec<String>,
@@ -130,13 +221,31 @@ fn inspect(mesh: &SurfaceMesh, signs: Signs) -> Inspection {
 }
 
 /// Check a mesh, repair what has one right answer and say what was done (see the
-/// module doc). Open, non-manifold or self-crossing input is accepted with warnings.
+/// module doc), with the default [`InputOptions`]. Open, non-manifold or self-crossing
+/// input is accepted with warnings.
 pub fn prepare_input(input: SurfaceMesh) -> Result<PreparedSurface> {
-    prepare(input, Signs::Now)
+    prepare_input_with(input, &InputOptions::default())
 }
 
-/// [`prepare_input`], its distance structure with or without signs.
-pub(super) fn prepare(input: SurfaceMesh, signs: Signs) -> Result<PreparedSurface> {
+/// [`prepare_input`] with the given options.
+pub fn prepare_input_with(input: SurfaceMesh, options: &InputOptions) -> Result<PreparedSurface> {
+    prepare(input, options, Signs::Now)
+}
+
+/// [`prepare_input_with`], its distance structure with or without signs.
+pub(super) fn prepare(
+    input: SurfaceMesh,
+    options: &InputOptions,
+    signs: Signs,
+) -> Result<PreparedSurface> {
+    // 0. Corners that are one point.
+    options.check()?;
+    let WeldedInput {
+        mesh: input,
+        input_vertex: welded_from,
+        note: welded,
+        ..
+    } = weld_input(input, options);
     let Inspection {
         report,
         plain,
@@ -144,12 +253,13 @@ pub(super) fn prepare(input: SurfaceMesh, signs: Signs) -> Result<PreparedSurfac
         distance,
     } = inspect(&input, signs);
     refuse_unusable(&report)?;
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> = welded.into_iter().collect();
     let mut warnings = Vec::new();
 
     // 1. Unreferenced vertices.
-    let (mut mesh, input_vertex) = remove_unreferenced(&input);
-    let removed = input.positions.len() - input_vertex.len();
+    let (mut mesh, kept) = remove_unreferenced(&input);
+    let removed = input.positions.len() - kept.len();
+    let input_vertex: Vec<u32> = kept.iter().map(|&v| welded_from[v as usize]).collect();
     if removed > 0 {
         notes.push(format!(
             "removed {removed} vertices that no face uses (they would have set the bounding box)"
@@ -241,11 +351,12 @@ pub(super) fn prepare(input: SurfaceMesh, signs: Signs) -> Result<PreparedSurfac
     }
     // The run's distance structure: the one that inspected the input when nothing was
     // changed, else one of the repaired mesh.
-    let distance = match distance {
+    let mut distance = match distance {
         Some(d) if mesh == input && signs == Signs::Later => d.recording(crossings),
         Some(d) if mesh == input => d.with_crossings(&mesh, crossings),
         _ => SurfaceDistance::of_surface(&mesh),
     };
+    refuse_without_volume(&mesh, &after, &mut distance)?;
     Ok(PreparedSurface {
         mesh,
         report,
@@ -307,6 +418,75 @@ fn refuse_unusable(report: &MeshReport) -> Result<()> {
         return Err(flat_error(report));
     }
     Ok(())
+}
+
+/// Triangles sampled (evenly through the faces) to judge whether an open surface bounds
+/// a solid ([`refuse_without_volume`]).
+const BOUNDING_SAMPLES: usize = 2000;
+
+/// An open surface bounds a solid when at least this share of its sampled triangles
+/// lie between the inside and the outside of the winding number.
+const MIN_BOUNDING_SHARE: f64 = 0.5;
+
+/// The error for input that has no volume to mesh, found in well under a second: no
+/// component is closed, and fewer than [`MIN_BOUNDING_SHARE`] of its triangles (a
+/// sample of [`BOUNDING_SAMPLES`]) have the solid (winding number ≥ ½) on one side
+/// only, the mark of open sheets (both sides outside: a chair drawn as panels) and
+/// triangle soups (random sides). A scan with holes, or a solid split at texture
+/// seams, passes: nearly all its triangles separate in from out. Closed surfaces are
+/// not asked (a flat one is refused as flat). Builds the winding number's expansions
+/// when `distance` has none.
+fn refuse_without_volume(
+    mesh: &SurfaceMesh,
+    report: &MeshReport,
+    distance: &mut SurfaceDistance,
+) -> Result<()> {
+    let closed = report
+        .component_details
+        .iter()
+        .any(|c| c.boundary_loops == 0 && c.genus.is_some());
+    if closed || mesh.triangles.is_empty() {
+        return Ok(());
+    }
+    distance.add_winding();
+    let step = mesh.num_triangles().div_ceil(BOUNDING_SAMPLES).max(1);
+    let offset = 1e-4 * report.bbox_diagonal;
+    let (mut sampled, mut bounding) = (0usize, 0usize);
+    for f in (0..mesh.num_triangles()).step_by(step) {
+        let n = mesh.face_normal_scaled(f);
+        let length = norm(n);
+        if !(length > 0.0 && length.is_finite()) {
+            continue;
+        }
+        let c = mesh.corners(f);
+        let centroid = [0, 1, 2].map(|k| (c[0][k] + c[1][k] + c[2][k]) / 3.0);
+        let at = |sign: f64| {
+            let p = [0, 1, 2].map(|k| centroid[k] + sign * offset * n[k] / length);
+            distance.winding_number(p) >= 0.5
+        };
+        sampled += 1;
+        if at(-1.0) != at(1.0) {
+            bounding += 1;
+        }
+    }
+    let share = bounding as f64 / sampled.max(1) as f64;
+    if sampled > 0 && share >= MIN_BOUNDING_SHARE {
+        return Ok(());
+    }
+    let what = if report.non_manifold_edges > report.edges / 4 {
+        "sheets glued along their edges"
+    } else if report.components * 2 > report.faces {
+        "a triangle soup"
+    } else {
+        "open sheets"
+    };
+    Err(Error::new(
+        ErrorKind::InvalidMesh,
+        format!(
+            "the surface encloses no volume: it looks like {what} (no component is closed, and {bounding} of {sampled} sampled triangles have the solid its winding number encloses on one side, under {:.0} %)",
+            100.0 * MIN_BOUNDING_SHARE
+        ),
+    ))
 }
 
 fn flat_error(report: &MeshReport) -> Error {

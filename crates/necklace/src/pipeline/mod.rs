@@ -55,7 +55,8 @@ pub use critical::{
 };
 use input::seeds_near;
 pub use input::{
-    inspect_surface, load_surface, meshed_boundary, prepare_input, prepare_surface, PreparedSurface,
+    inspect_surface, load_surface, meshed_boundary, prepare_input, prepare_input_with,
+    prepare_surface, weld_input, InputOptions, PreparedSurface, WeldedInput, DEFAULT_WELD,
 };
 use report::SideRun;
 pub use report::{
@@ -105,6 +106,8 @@ pub struct NeckOptions {
     /// When a dense surface is simplified for the volume, field and saddles (the loops
     /// are cut again and tightened on the input; `simplify`).
     pub simplify: SimplifyOptions,
+    /// The input step: which corners are welded ([`InputOptions`]).
+    pub input: InputOptions,
 }
 
 impl Default for NeckOptions {
@@ -118,6 +121,7 @@ impl Default for NeckOptions {
             keep_volume: false,
             sides_at_once: true,
             simplify: SimplifyOptions::default(),
+            input: InputOptions::default(),
         }
     }
 }
@@ -179,7 +183,7 @@ pub fn find_necks_with_progress(
     if dense {
         progress.start("input and simplification", 0);
     }
-    let run = prepare_run(surface, &options.simplify);
+    let run = prepare_run(surface, &options.input, &options.simplify);
     if dense {
         progress.finish();
     }

@@ -6,7 +6,9 @@
 //! every component; otherwise the input is used and a warning says why. The loops
 //! found on the copy are carried back to the input by `loops::transfer_loops`.
 
-use super::input::{add_signs, prepare, prepare_input, PreparedSurface, Signs};
+use super::input::{
+    add_signs, prepare, prepare_input, prepare_input_with, InputOptions, PreparedSurface, Signs,
+};
 use super::report::SimplifyReport;
 use crate::error::Result;
 use crate::mesh::{MeshReport, SurfaceMesh};
@@ -34,14 +36,15 @@ pub(super) struct Working {
 /// what to say about it (`None`: not dense enough to simplify).
 pub(super) fn prepare_run(
     input: &SurfaceMesh,
+    input_options: &InputOptions,
     options: &SimplifyOptions,
 ) -> Result<(PreparedSurface, Option<Working>)> {
     let triangles = input.num_triangles();
     if !options.applies_to(triangles) {
-        return Ok((prepare_input(input.clone())?, None));
+        return Ok((prepare_input_with(input.clone(), input_options)?, None));
     }
     let (prepared, early) = rayon::join(
-        || prepare(input.clone(), Signs::Later),
+        || prepare(input.clone(), input_options, Signs::Later),
         || {
             let start = std::time::Instant::now();
             (simplify(input, options), start.elapsed().as_secs_f64())

@@ -17,6 +17,15 @@ pub fn meshes_dir() -> PathBuf {
     }
 }
 
+/// The folder of shared real-world models (printable parts, CAD exports, soups):
+/// `$NECKLACE_REALWORLD`, else `../shared/data/realworld` beside the repository.
+pub fn realworld_dir() -> PathBuf {
+    match std::env::var_os("NECKLACE_REALWORLD") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/realworld"),
+    }
+}
+
 /// The 21 shared mesh files, sorted; `None` (after printing SKIPPED) when the folder is
 /// absent.
 pub fn shared_meshes() -> Option<Vec<PathBuf>> {

@@ -7,6 +7,7 @@ mod common;
 mod critical;
 mod distance;
 mod fuzz;
+mod input;
 mod io;
 mod laplacian;
 mod loops;
