@@ -104,29 +104,18 @@ pub fn weld(mesh: &SurfaceMesh, tolerance: f64) -> (SurfaceMesh, Vec<u32>, Weldi
     };
     let reach: i64 = if tolerance > 0.0 { 1 } else { 0 };
     // The vertices on an edge that only one triangle has.
-    let mut faces_at_edge: HashMap<[u32; 2], u32> =
-        HashMap::with_capacity(3 * mesh.triangles.len());
-    for t in &mesh.triangles {
-        for i in 0..3 {
-            let (a, b) = (t[i], t[(i + 1) % 3]);
-            *faces_at_edge.entry([a.min(b), a.max(b)]).or_default() += 1;
-        }
-    }
-    let mut used = vec![false; n];
-    for (edge, &count) in &faces_at_edge {
-        if count == 1 {
-            for &v in edge {
-                if let Some(u) = used.get_mut(v as usize) {
-                    *u = true;
-                }
-            }
+    let topology = Topology::new(mesh);
+    let mut on_boundary = vec![false; n];
+    for e in topology.boundary_edges() {
+        for v in topology.edges()[e] {
+            on_boundary[v as usize] = true;
         }
     }
     let mut representatives: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(n);
     let mut into: Vec<u32> = (0..n as u32).collect();
     let mut merged = 0;
     for (v, p) in mesh.positions.iter().enumerate() {
-        if !used[v] || p.iter().any(|c| !c.is_finite()) {
+        if !on_boundary[v] || p.iter().any(|c| !c.is_finite()) {
             continue;
         }
         let key = cell(p);

@@ -8,7 +8,7 @@
 //! 0. corners closer than [`InputOptions::weld`] times the bounding-box diagonal are
 //!    welded into one vertex (`mesh::weld`: STL stores each triangle's corners apart,
 //!    exporters round, OBJ and PLY duplicate positions along texture seams), and the
-//!    triangles that collapses are removed ([`weld_input`]);
+//!    triangles that this collapses are removed ([`weld_input`]);
 //! 1. vertices no triangle uses are removed (they would set the bounding box, and with
 //!    it the lattice spacing and the smoothing scales);
 //! 2. faces are turned to agree with their neighbours, per component
@@ -40,9 +40,9 @@ use crate::tet::{TetMesh, VertexKind};
 
 /// Corners closer than this fraction of the bounding-box diagonal are one point, by
 /// default ([`InputOptions::weld`]): far below any feature the method resolves (the
-/// lattice spacing is 1/64 of the diagonal), far above the rounding of coordinates
-/// written in single precision (about 1e-7 of each coordinate) only where that rounding
-/// is what separates them.
+/// lattice spacing is 1/64 of the diagonal) and far above the `6e-17` an exporter writes
+/// for 0. Single precision rounds each coordinate by up to 6e-8 of itself: corners that
+/// an exporter rounded apart that far need a larger `--weld` (1e-6, say).
 pub const DEFAULT_WELD: f64 = 1e-8;
 
 /// Options of the input step ([`prepare_input_with`]).
