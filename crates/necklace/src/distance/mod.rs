@@ -152,8 +152,8 @@ impl SurfaceDistance {
     /// The distance structure of a surface the method runs on, built once per run and
     /// shared by every stage that asks about the surface (the input checks, both
     /// volume meshes, the distance field, the loops): [`SurfaceDistance::new`], its
-    /// crossing pairs found once ([`SurfaceDistance::crossings`]) and, when there are
-    /// none, the sign from the pseudonormals ([`SurfaceDistance::use_pseudonormal_sign`]).
+    /// crossing pairs found once ([`SurfaceDistance::crossings`]) and the sign from the
+    /// pseudonormals wherever they decide it ([`SurfaceDistance::use_pseudonormal_sign`]).
     pub fn of_surface(mesh: &SurfaceMesh) -> Self {
         let distance = SurfaceDistance::new(mesh);
         let crossings = distance.self_intersections(&mesh.triangles);
@@ -161,13 +161,11 @@ impl SurfaceDistance {
     }
 
     /// Record `crossings`, the [`SurfaceDistance::self_intersections`] of `mesh` (the
-    /// mesh this was built from), and without any take the sign from the
-    /// pseudonormals, as [`SurfaceDistance::of_surface`] does.
+    /// mesh this was built from), and take the sign from the pseudonormals wherever
+    /// they decide it, as [`SurfaceDistance::of_surface`] does.
     pub fn with_crossings(self, mesh: &SurfaceMesh, crossings: Vec<[u32; 2]>) -> Self {
         let mut distance = self.recording(crossings);
-        if distance.crossings().is_some_and(|c| c.is_empty()) {
-            distance.use_pseudonormal_sign(mesh);
-        }
+        distance.use_pseudonormal_sign(mesh);
         distance
     }
 
@@ -186,12 +184,27 @@ impl SurfaceDistance {
 
     /// Take the sign of signed distances from the closest point's angle-weighted
     /// pseudonormal instead of the winding number: exact, and far cheaper near the
-    /// surface, for a closed, manifold, consistently oriented surface that does not cross
-    /// itself. `mesh` must be the mesh this was built from; the caller vouches that it
-    /// does not cross itself (e.g. [`SurfaceDistance::self_intersections`] is empty).
-    /// Returns whether the mesh qualifies (it is left on the winding number otherwise).
+    /// surface. `mesh` must be the mesh this was built from. Without crossings recorded
+    /// ([`SurfaceDistance::recording`]) the caller vouches that it does not cross itself,
+    /// and the mesh qualifies when it is closed, manifold and consistently oriented.
+    /// With crossings recorded (or a few non-manifold vertices) and the winding
+    /// number's expansions built, every triangle away from them that its winding
+    /// number confirms decides locally, and the others leave the sign to the winding
+    /// number (`pseudonormal`). Returns whether any triangle decides by its
+    /// pseudonormal (the sign stays on the winding number otherwise).
     pub fn use_pseudonormal_sign(&mut self, mesh: &SurfaceMesh) -> bool {
-        self.pseudonormals = Pseudonormals::new(mesh, &self.bvh).map(std::sync::Arc::new);
+        let pseudonormals = match (&self.crossings, &self.expansions) {
+            (Some(crossings), Some(expansions)) => {
+                let winding = |p: [f64; 3]| winding::fast(&self.bvh, expansions, p);
+                let local = pseudonormal::Local {
+                    crossings,
+                    winding: &winding,
+                };
+                Pseudonormals::new(mesh, &self.bvh, Some(local))
+            }
+            _ => Pseudonormals::new(mesh, &self.bvh, None),
+        };
+        self.pseudonormals = pseudonormals.map(std::sync::Arc::new);
         self.pseudonormals.is_some()
     }
 

@@ -7,47 +7,136 @@
 //! inside a face, the sum of the two faces' normals on an edge, and at a vertex the sum
 //! of its faces' normals weighted by their angles there. It costs nothing beyond the
 //! closest point, where the winding number sums over the whole surface near it.
+//!
+//! **Surfaces that cross themselves** (overlapping parts, a bolt through a plate) or are
+//! non-manifold at a few vertices keep the sign local on every triangle away from those
+//! places. The open segment from `p` to its closest point `q` meets no surface (a point
+//! of it on the surface would be closer), so `p` has the winding number of the side of
+//! `q`'s triangle it lies on, next to `q`. Where the triangles form a closed chain (every
+//! edge used as often in each direction), the winding number is an integer, constant on
+//! each side of a triangle that nothing crosses or touches: it is read once per triangle,
+//! just off its front and its back at four points, and the triangle decides locally only
+//! when the four agree. Triangles of a crossing, the ring round them, those at a
+//! non-manifold or degenerate corner, and those whose samples disagree (a coplanar part
+//! touching them) leave the sign to the winding number at `p`.
+
+use std::collections::HashMap;
 
 use rayon::prelude::*;
 
 use super::bvh::Bvh;
-use crate::geom::{add, dot, norm, scale, sub};
+use crate::geom::{add, cross, dot, norm, scale, sub};
 use crate::mesh::{SurfaceMesh, Topology};
 
 /// Per triangle (in tree order): the face normal, the normals of its edges `ab`, `bc`,
-/// `ca`, and of its corners `a`, `b`, `c`.
+/// `ca`, and of its corners `a`, `b`, `c`; and the sign in front of it and behind it
+/// (`[0, 0]`: not decided locally).
 pub(super) struct Pseudonormals {
     normals: Vec<[[f64; 3]; 7]>,
+    sides: Vec<[i8; 2]>,
 }
 
 /// Barycentric coordinates this close to 0 put the closest point on an edge or corner.
 const FEATURE_EPSILON: f64 = 1e-9;
 
+/// The offset of a triangle's winding samples off its plane, as a fraction of its
+/// inradius: far closer to it than to anything but a part touching it.
+const SAMPLE_OFFSET: f64 = 1e-2;
+
+/// A winding sample counts as the integer it is nearest when within this of it.
+const INTEGER_TOLERANCE: f64 = 0.2;
+
+/// Where the surface crosses itself or is not manifold: the crossing pairs of mesh faces
+/// and the winding number, for [`Pseudonormals::new`] to decide the sign triangle by
+/// triangle.
+pub(super) struct Local<'a> {
+    pub crossings: &'a [[u32; 2]],
+    pub winding: &'a (dyn Fn([f64; 3]) -> f64 + Sync),
+}
+
 impl Pseudonormals {
-    /// The pseudonormals of `mesh`, or `None` unless every edge has exactly two faces
-    /// that use it in opposite directions, every vertex's faces form one fan, and no
-    /// triangle is degenerate (the conditions of the theorem, but for self-crossings,
-    /// which the caller must rule out).
-    pub fn new(mesh: &SurfaceMesh, bvh: &Bvh) -> Option<Pseudonormals> {
-        let topology = Topology::new(mesh);
-        if !topology.boundary_edges().is_empty()
-            || !topology.non_manifold_edges().is_empty()
-            || !topology.inconsistently_oriented_edges(mesh).is_empty()
-            || !topology.non_manifold_vertices(mesh).is_empty()
-            || bvh.faces.len() != mesh.triangles.len()
-        {
+    /// The pseudonormals of `mesh`. Without `local`: `None` unless every edge has
+    /// exactly two faces that use it in opposite directions, every vertex's faces form
+    /// one fan, and no triangle is degenerate (the conditions of the theorem, but for
+    /// self-crossings, which the caller must rule out). With `local` on a surface that
+    /// meets those conditions and has no crossing, the same; otherwise the triangles
+    /// away from crossings and defects decide locally (see the module doc), and `None`
+    /// when the triangles are not a closed chain or none decides.
+    pub fn new(mesh: &SurfaceMesh, bvh: &Bvh, local: Option<Local<'_>>) -> Option<Pseudonormals> {
+        if bvh.faces.len() != mesh.triangles.len() {
             return None;
         }
+        let topology = Topology::new(mesh);
         let unit = |n: [f64; 3]| {
             let l = norm(n);
             (l > 0.0 && l.is_finite()).then(|| scale(n, 1.0 / l))
         };
-        let face_normals: Vec<[f64; 3]> = (0..mesh.triangles.len())
+        let face_normals: Vec<Option<[f64; 3]>> = (0..mesh.triangles.len())
             .into_par_iter()
             .map(|f| unit(mesh.face_normal_scaled(f)))
-            .collect::<Option<_>>()?;
+            .collect();
+        // Vertices where the theorem's conditions fail.
+        let mut bad = vec![false; mesh.num_vertices()];
+        for e in topology
+            .boundary_edges()
+            .into_iter()
+            .chain(topology.non_manifold_edges())
+            .chain(topology.inconsistently_oriented_edges(mesh))
+        {
+            for v in topology.edges()[e] {
+                bad[v as usize] = true;
+            }
+        }
+        for v in topology.non_manifold_vertices(mesh) {
+            bad[v] = true;
+        }
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            if face_normals[f].is_none() {
+                for &v in t {
+                    bad[v as usize] = true;
+                }
+            }
+        }
+        let manifold = !bad.contains(&true);
+        let local = match local {
+            Some(local) if !(manifold && local.crossings.is_empty()) => local,
+            _ if manifold => return Some(Self::build(mesh, bvh, &topology, &face_normals, None)),
+            _ => return None,
+        };
+        if !is_closed_chain(mesh) {
+            return None;
+        }
+        // The crossing triangles and the ring round them.
+        for [f, g] in local.crossings {
+            for &v in mesh.triangles[*f as usize]
+                .iter()
+                .chain(&mesh.triangles[*g as usize])
+            {
+                bad[v as usize] = true;
+            }
+        }
+        let pseudonormals = Self::build(mesh, bvh, &topology, &face_normals, Some((&bad, &local)));
+        pseudonormals
+            .sides
+            .iter()
+            .any(|s| s[0] != 0)
+            .then_some(pseudonormals)
+    }
+
+    /// The normals, and the sides: all `[+1, −1]` without `local`; else read off the
+    /// winding number on triangles with no `bad` corner.
+    fn build(
+        mesh: &SurfaceMesh,
+        bvh: &Bvh,
+        topology: &Topology,
+        face_normals: &[Option<[f64; 3]>],
+        local: Option<(&[bool], &Local<'_>)>,
+    ) -> Pseudonormals {
         let mut vertex_normals = vec![[0.0; 3]; mesh.num_vertices()];
         for (f, t) in mesh.triangles.iter().enumerate() {
+            let Some(normal) = face_normals[f] else {
+                continue;
+            };
             let p = t.map(|v| mesh.positions[v as usize]);
             for i in 0..3 {
                 let e1 = sub(p[(i + 1) % 3], p[i]);
@@ -56,30 +145,35 @@ impl Pseudonormals {
                     .clamp(-1.0, 1.0)
                     .acos();
                 let v = t[i] as usize;
-                vertex_normals[v] = add(vertex_normals[v], scale(face_normals[f], angle));
+                vertex_normals[v] = add(vertex_normals[v], scale(normal, angle));
             }
         }
-        let normals = bvh
+        let (normals, sides) = bvh
             .faces
             .par_iter()
-            .map(|&f| {
+            .zip(&bvh.tris)
+            .map(|(&f, tri)| {
                 let f = f as usize;
                 let t = mesh.triangles[f];
                 let mut out = [[0.0; 3]; 7];
-                out[0] = face_normals[f];
+                out[0] = face_normals[f].unwrap_or([0.0; 3]);
                 for i in 0..3 {
-                    let e = topology.face_edge(f, i)?;
-                    let sum = topology
-                        .edge_faces(e)
-                        .iter()
-                        .fold([0.0; 3], |s, &g| add(s, face_normals[g as usize]));
-                    out[1 + i] = sum;
+                    if let Some(e) = topology.face_edge(f, i) {
+                        out[1 + i] = topology.edge_faces(e).iter().fold([0.0; 3], |s, &g| {
+                            add(s, face_normals[g as usize].unwrap_or([0.0; 3]))
+                        });
+                    }
                     out[4 + i] = vertex_normals[t[i] as usize];
                 }
-                Some(out)
+                let sides = match local {
+                    None => [1, -1],
+                    Some((bad, _)) if t.iter().any(|&v| bad[v as usize]) => [0, 0],
+                    Some((_, local)) => sampled_sides(tri, out[0], local.winding),
+                };
+                (out, sides)
             })
-            .collect::<Option<Vec<_>>>()?;
-        Some(Pseudonormals { normals })
+            .unzip();
+        Pseudonormals { normals, sides }
     }
 
     /// The sign (−1 inside, +1 outside) at `p` whose closest point `q` lies on the tree
@@ -113,6 +207,73 @@ impl Pseudonormals {
         let d = sub(p, q);
         let s = dot(d, n);
         let scale_ = norm(d) * norm(n);
-        (s.abs() > 1e-9 * scale_ && scale_ > 0.0).then(|| s.signum())
+        if !(s.abs() > 1e-9 * scale_ && scale_ > 0.0) {
+            return None;
+        }
+        let side = self.sides[t][if s > 0.0 { 0 } else { 1 }];
+        (side != 0).then_some(side as f64)
     }
+}
+
+/// Whether every edge is used as often in one direction as in the other: then the
+/// triangles bound, and the winding number is an integer off the surface.
+fn is_closed_chain(mesh: &SurfaceMesh) -> bool {
+    let mut balance: HashMap<[u32; 2], i32> = HashMap::with_capacity(3 * mesh.triangles.len());
+    for t in &mesh.triangles {
+        for i in 0..3 {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            let (key, step) = if a < b { ([a, b], 1) } else { ([b, a], -1) };
+            *balance.entry(key).or_insert(0) += step;
+        }
+    }
+    balance.values().all(|&b| b == 0)
+}
+
+/// The signs just in front of triangle `tri` (unit normal `n`) and just behind it, from
+/// the winding number at four points of it (the centroid and a point towards each
+/// corner) offset by a hundredth of its inradius; `[0, 0]` unless the four agree on
+/// each side, each within [`INTEGER_TOLERANCE`] of an integer, or for a triangle too
+/// thin for an offset above the coordinates' rounding.
+fn sampled_sides(
+    tri: &[[f64; 3]; 3],
+    n: [f64; 3],
+    winding: &(dyn Fn([f64; 3]) -> f64 + Sync),
+) -> [i8; 2] {
+    let [a, b, c] = *tri;
+    let area2 = norm(cross(sub(b, a), sub(c, a)));
+    let perimeter = norm(sub(b, a)) + norm(sub(c, b)) + norm(sub(a, c));
+    let inradius = area2 / perimeter;
+    let magnitude = tri.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    let offset = SAMPLE_OFFSET * inradius;
+    let too_thin = offset.is_nan() || offset <= 1e-9 * magnitude;
+    if n == [0.0; 3] || too_thin {
+        return [0, 0];
+    }
+    let at = |w: [f64; 3]| add(add(scale(a, w[0]), scale(b, w[1])), scale(c, w[2]));
+    let third = 1.0 / 3.0;
+    let points = [
+        at([third; 3]),
+        at([0.6, 0.2, 0.2]),
+        at([0.2, 0.6, 0.2]),
+        at([0.2, 0.2, 0.6]),
+    ];
+    [1.0, -1.0].map(|direction| {
+        let mut value = None;
+        for &x in &points {
+            let w = winding(add(x, scale(n, direction * offset)));
+            let rounded = w.round();
+            let off_integer =
+                (w - rounded).abs().is_nan() || (w - rounded).abs() > INTEGER_TOLERANCE;
+            if off_integer || value.is_some_and(|v| v != rounded) {
+                return 0;
+            }
+            value = Some(rounded);
+        }
+        // Inside where the winding number is at least ½ (`SurfaceDistance::is_inside`).
+        if value.is_some_and(|v| v >= 1.0) {
+            -1
+        } else {
+            1
+        }
+    })
 }

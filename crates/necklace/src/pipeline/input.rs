@@ -142,8 +142,8 @@ pub struct PreparedSurface {
     /// surface), as indices into `mesh`'s faces (the input's, in their order, less the
     /// ones welding collapsed).
     pub crossing_faces: Vec<u32>,
-    /// The distance structure of `mesh`, with its crossing pairs and, when there are
-    /// none, the pseudonormal sign ([`SurfaceDistance::of_surface`]): built once, and
+    /// The distance structure of `mesh`, with its crossing pairs and the pseudonormal
+    /// sign wherever it decides ([`SurfaceDistance::of_surface`]): built once, and
     /// shared by every stage of the run.
     pub distance: SurfaceDistance,
     /// For each vertex of `mesh`, its index in the input (the input's vertices that a
@@ -371,12 +371,10 @@ pub(super) fn prepare(
 }
 
 /// Give a surface prepared with [`Signs::Later`] the signs [`prepare_input`] gives:
-/// the fast winding number, and the pseudonormal sign where it does not cross itself.
+/// the fast winding number, and the pseudonormal sign wherever it decides.
 pub(super) fn add_signs(prepared: &mut PreparedSurface) {
     prepared.distance.add_winding();
-    if prepared.crossing_faces.is_empty() {
-        prepared.distance.use_pseudonormal_sign(&prepared.mesh);
-    }
+    prepared.distance.use_pseudonormal_sign(&prepared.mesh);
 }
 
 /// Check that `mesh` is a closed, manifold surface and [`prepare_input`] it. An error

@@ -112,6 +112,17 @@ fn merged(a: &SurfaceMesh, b: &SurfaceMesh) -> SurfaceMesh {
     m
 }
 
+/// A stream of numbers uniform in [0, 1) from `seed` (a linear congruential generator).
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 
 #[test]
@@ -378,13 +389,7 @@ fn the_pseudonormal_sign_agrees_with_the_winding_number() {
         let by_winding = SurfaceDistance::new(&mesh);
         let mut by_normal = SurfaceDistance::new(&mesh);
         assert!(by_normal.use_pseudonormal_sign(&mesh));
-        let mut state = 7u64;
-        let mut random = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = uniform(7);
         let mut checked = 0;
         for i in 0..4000 {
             // Points near vertices (a tiny offset) and anywhere in the box.
@@ -409,4 +414,75 @@ fn the_pseudonormal_sign_agrees_with_the_winding_number() {
     let mut open = sphere(12.0);
     open.triangles.pop();
     assert!(!SurfaceDistance::new(&open).use_pseudonormal_sign(&open));
+}
+
+/// A sphere of radius `r` about `c`, its faces turned inward when `inward` (a cavity).
+fn ball(r: f64, c: [f64; 3], inward: bool) -> SurfaceMesh {
+    let mut m = sphere(24.0);
+    for p in &mut m.positions {
+        *p = [0, 1, 2].map(|k| c[k] + r * p[k]);
+    }
+    if inward {
+        for t in &mut m.triangles {
+            t.swap(1, 2);
+        }
+    }
+    m
+}
+
+#[test]
+fn the_pseudonormal_sign_holds_on_overlapping_parts_away_from_their_crossings() {
+    // Three balls that cross each other (each pair along a circle), a fourth buried in
+    // the first, and a cavity (an inward ball) in the second. The solid is where the
+    // exact winding number is at least ½. Taking the pseudonormal's side alone (as on an
+    // embedded surface) would call the points round the buried ball outside.
+    let parts = [
+        ball(1.0, [0.0, 0.0, 0.0], false),
+        ball(1.0, [1.2, 0.0, 0.0], false),
+        ball(0.8, [0.0, 1.1, 0.0], false),
+        ball(0.3, [-0.4, -0.3, 0.0], false),
+        ball(0.3, [1.6, 0.0, 0.0], true),
+    ];
+    let mesh = parts[1..]
+        .iter()
+        .fold(parts[0].clone(), |m, p| merged(&m, p));
+    let reference = SurfaceDistance::new(&mesh);
+    let crossings = reference.self_intersections(&mesh.triangles);
+    assert!(!crossings.is_empty());
+    let mut local = SurfaceDistance::new(&mesh).recording(crossings.clone());
+    assert!(
+        local.use_pseudonormal_sign(&mesh),
+        "no triangle decides locally"
+    );
+    // The same through `of_surface`, which every run uses.
+    let shared = SurfaceDistance::of_surface(&mesh);
+    let mut random = uniform(11);
+    let mut checked = 0;
+    for i in 0..6000 {
+        // Half the points within 1e-3 of a vertex (of a buried part too), half anywhere.
+        let p = if i % 2 == 0 {
+            let v = mesh.positions[(random() * mesh.positions.len() as f64) as usize];
+            [0, 1, 2].map(|k| v[k] + 2e-3 * (random() - 0.5))
+        } else {
+            [0, 1, 2].map(|k| [0.6, 0.3, 0.0][k] + 4.0 * (random() - 0.5))
+        };
+        let exact = reference.winding_number_exact(p);
+        if (exact - 0.5).abs() < 0.25 {
+            continue; // on the surface, up to the offset
+        }
+        let inside = exact >= 0.5;
+        let (a, b) = (local.signed_distance(p), shared.signed_distance(p));
+        if a.abs() < 1e-9 {
+            continue;
+        }
+        assert_eq!(a < 0.0, inside, "at {p:?}: {a}, winding {exact}");
+        assert_eq!(b < 0.0, inside, "of_surface at {p:?}: {b}, winding {exact}");
+        assert_eq!(
+            local.signed_distance_within(p, 0.05) < 0.0,
+            inside,
+            "within at {p:?}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 5000, "{checked}");
 }
