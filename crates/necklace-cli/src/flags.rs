@@ -53,10 +53,11 @@ pub enum Command {
         /// Lattice spacing along the surface (default: bounding-box diagonal / 64).
         #[arg(long, allow_negative_numbers = true)]
         h: Option<f64>,
-        /// The most tets the volume mesh may have: a larger run is refused, and thin
-        /// parts are not refined past it.
-        #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS, allow_negative_numbers = true)]
-        max_tets: usize,
+        /// Memory budget (bytes, or with K, M, G or T: 8G is 8e9 bytes): thin parts
+        /// are not refined past it, and a mesh estimated over it is refused before it
+        /// is built.
+        #[arg(long, default_value = "8G", value_parser = parse_memory, allow_negative_numbers = true)]
+        max_memory: u64,
         /// The volume mesher: necklace's isosurface stuffing, or TetGen "pq1.2" (needs a
         /// build with --features tetgen, which is AGPL-3.0).
         #[arg(long, value_enum, default_value = "stuffing")]
@@ -305,10 +306,11 @@ pub struct MethodArgs {
     /// Lattice spacing of the volume mesh (default: bounding-box diagonal / 64).
     #[arg(long, allow_negative_numbers = true)]
     pub h: Option<f64>,
-    /// The most tets a volume mesh may have: a larger run is refused, and thin parts
-    /// are not refined past it.
-    #[arg(long, default_value_t = necklace::volume::DEFAULT_MAX_TETS, allow_negative_numbers = true)]
-    pub max_tets: usize,
+    /// Memory budget of the run (bytes, or with K, M, G or T: 8G is 8e9 bytes), shared
+    /// by the two volume meshes: thin parts are not refined past it, and a mesh
+    /// estimated over it is refused before it is built.
+    #[arg(long, default_value = "8G", value_parser = parse_memory, allow_negative_numbers = true)]
+    pub max_memory: u64,
     /// The most heat steps (--levels, or --steps with the paper schedule) a run may
     /// take: more is refused before any work.
     #[arg(long, default_value_t = necklace::morse::DEFAULT_MAX_STEPS, allow_negative_numbers = true)]
@@ -324,7 +326,7 @@ impl MethodArgs {
     pub fn volume(&self) -> VolumeOptions {
         VolumeOptions {
             h: self.h,
-            max_tets: self.max_tets,
+            max_memory: self.max_memory,
             ..VolumeOptions::default()
         }
     }
@@ -399,6 +401,46 @@ impl From<MesherArg> for Mesher {
         match m {
             MesherArg::Stuffing => Mesher::Stuffing,
             MesherArg::Tetgen => Mesher::Tetgen,
+        }
+    }
+}
+
+/// A memory size: bytes, or a number with K, M, G or T (powers of 1000; a trailing B is
+/// allowed), e.g. `4G`, `1.5G`, `500M`.
+pub fn parse_memory(text: &str) -> Result<u64, String> {
+    let t = text.trim().to_ascii_uppercase();
+    let t = t.strip_suffix('B').unwrap_or(&t);
+    let (number, unit) = match t.char_indices().last() {
+        Some((i, 'K')) => (&t[..i], 1e3),
+        Some((i, 'M')) => (&t[..i], 1e6),
+        Some((i, 'G')) => (&t[..i], 1e9),
+        Some((i, 'T')) => (&t[..i], 1e12),
+        _ => (t, 1.0),
+    };
+    let value: f64 = number
+        .trim()
+        .parse()
+        .map_err(|_| format!("{text:?} is not a size (e.g. 4G, 500M or a number of bytes)"))?;
+    let bytes = value * unit;
+    if !(1.0..1.8e19).contains(&bytes) {
+        return Err(format!("{text:?} must be a positive size below 18E bytes"));
+    }
+    Ok(bytes as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_memory;
+
+    #[test]
+    fn memory_sizes_read_with_their_units() {
+        assert_eq!(parse_memory("4G"), Ok(4_000_000_000));
+        assert_eq!(parse_memory("1.5gb"), Ok(1_500_000_000));
+        assert_eq!(parse_memory("500M"), Ok(500_000_000));
+        assert_eq!(parse_memory("64k"), Ok(64_000));
+        assert_eq!(parse_memory("123"), Ok(123));
+        for bad in ["", "G", "lots", "-1G", "0", "nanG", "1e30"] {
+            assert!(parse_memory(bad).is_err(), "{bad}");
         }
     }
 }

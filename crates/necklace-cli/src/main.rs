@@ -90,14 +90,14 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             exterior,
             input,
             h,
-            max_tets,
+            max_memory,
             mesher,
             output,
             json,
         } => {
             let options = VolumeOptions {
                 h,
-                max_tets,
+                max_memory,
                 mesher: mesher.into(),
                 ..VolumeOptions::default()
             };
@@ -433,14 +433,17 @@ fn render(
 
 /// Read a mesh and prepare it for the method (`pipeline::prepare_input`), printing
 /// what was repaired and what is unusual about it.
-fn read_prepared(path: &std::path::Path, input: &InputOptions) -> Result<necklace::SurfaceMesh> {
+fn read_prepared(
+    path: &std::path::Path,
+    input: &InputOptions,
+) -> Result<pipeline::PreparedSurface> {
     let prepared =
         pipeline::prepare_input_with(io::read_mesh(path)?, input).map_err(|e| e.in_file(path))?;
     print::note(path, &prepared.notes);
     for w in &prepared.warnings {
         eprintln!("necklace: warning: {}: {}", path.display(), printable(w));
     }
-    Ok(prepared.mesh)
+    Ok(prepared)
 }
 
 fn volume(
@@ -455,13 +458,15 @@ fn volume(
         io::check_tet_mesh_name(output)?;
         check_output_file(output)?;
     }
-    let surface = read_prepared(&path, input)?;
+    // The distance structure built while preparing serves the mesher too.
+    let prepared = read_prepared(&path, input)?;
     let side = if exterior {
         Side::Outside
     } else {
         Side::Inside
     };
-    let result = necklace::volume::volume_mesh(&surface, side, options)?;
+    let result =
+        necklace::volume::volume_mesh_with(&prepared.mesh, &prepared.distance, side, options)?;
     print::warn(&result.warnings);
     if let Some(output) = &output {
         io::write_tet_mesh(output, &result.mesh, &[])?;

@@ -129,7 +129,7 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
         tunnels: option(options, "tunnels", true)?,
         volume: VolumeOptions {
             h,
-            max_tets: option(options, "max_tets", volume.max_tets)?,
+            max_memory: option(options, "max_memory", volume.max_memory)?,
             ..volume
         },
         morse: MorseOptions {
@@ -405,7 +405,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("steps", options.morse.steps)?;
     out.set_item("tau", options.morse.tau)?;
     out.set_item("h", options.volume.h)?;
-    out.set_item("max_tets", options.volume.max_tets)?;
+    out.set_item("max_memory", options.volume.max_memory)?;
     out.set_item("max_steps", options.morse.max_steps)?;
     out.set_item(
         "solver",

@@ -181,7 +181,7 @@ def test_bad_input_raises_a_one_line_necklace_error(vertices, faces, message):
         dict(schedule="weekly"),
         dict(solver="fast"),
         dict(handles=False, tunnels=False),
-        dict(max_tets=10),
+        dict(max_memory=4000),
         dict(levels="many"),
     ],
 )
@@ -211,7 +211,7 @@ def test_garbage_never_crashes_the_interpreter():
         v = rng.normal(size=(n, 3)) * 10.0 ** float(rng.integers(-3, 4))
         f = rng.integers(0, n, size=(int(rng.integers(1, 16)), 3))
         try:
-            result = necklace.find_necks(v, f, max_tets=200_000)
+            result = necklace.find_necks(v, f, max_memory=80_000_000)
         except necklace.NecklaceError as e:
             assert "\n" not in str(e)
         else:

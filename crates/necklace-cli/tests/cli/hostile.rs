@@ -463,7 +463,7 @@ fn budgets_refuse_before_the_work() {
     );
     refused(
         &necklace(&["volume", KITTEN, "-q", "--h", "0.0001"]),
-        &["budget", "--max-tets"],
+        &["budget", "--max-memory"],
     );
     // Only regular files are read.
     refused(&necklace(&["info", "/dev/zero"]), &["not a regular file"]);

@@ -395,7 +395,7 @@ def find_necks(
     steps: int = 20,
     tau: float = 0.01,
     h: Optional[float] = None,
-    max_tets: int = 20_000_000,
+    max_memory: int = 8_000_000_000,
     max_steps: int = 1000,
     solver: str = "jacobi",
     plane_offsets: int = 16,
@@ -430,7 +430,9 @@ def find_necks(
             longest side is 1.
         h: lattice spacing of the volume mesh, input units (default: the bounding
             box diagonal / 64).
-        max_tets: the most tets a volume mesh may have (a larger run is refused).
+        max_memory: memory budget of the run in bytes, shared by the two volume
+            meshes (400 bytes a tet): thin parts are not refined past it, and a mesh
+            estimated over it is refused before it is built.
         max_steps: the most heat steps a run may take.
         solver: preconditioner of the heat steps' conjugate gradients: ``"jacobi"``
             (the diagonal) or ``"multigrid"`` (a smoothed-aggregation V-cycle: fewer,
@@ -485,7 +487,7 @@ def find_necks(
         steps=steps,
         tau=tau,
         h=h,
-        max_tets=max_tets,
+        max_memory=max_memory,
         max_steps=max_steps,
         solver=solver,
         plane_offsets=plane_offsets,

@@ -211,7 +211,7 @@ pub fn find_necks_with_progress(
         &work.mesh,
         &work.distance,
         &work.mesh_report,
-        &options.volume,
+        &side_volume_options(options),
     );
     progress.finish();
     let survey = survey?;
@@ -261,6 +261,20 @@ pub fn find_necks_with_progress(
     // 7. Loops located on the input's vertices (preparing may have dropped unused ones).
     report.index_by_input(&prepared.input_vertex);
     Ok(report)
+}
+
+/// The volume options of each side: `options.volume` with its memory budget shared by
+/// the sides meshed at the same time (half each when both are).
+fn side_volume_options(options: &NeckOptions) -> VolumeOptions {
+    let at_once = if options.handles && options.tunnels && options.sides_at_once {
+        2
+    } else {
+        1
+    };
+    VolumeOptions {
+        max_memory: options.volume.max_memory / at_once,
+        ..options.volume
+    }
 }
 
 /// The input surface, when the method runs on a simplified copy of it: the loops found

@@ -20,7 +20,8 @@
 //!    pass (|f(centre)| < half-diagonal; [`Domain::spacing_near`] may ask for less
 //!    detail on parts of the boundary; the 2:1 balance grades the rest), as small as the domain's [`SizingFeature`]s ask
 //!    where they reach (thin parts and gaps: no fixed floor), and coarser away from the
-//!    boundary. The budget ([`StuffingOptions::max_tets`]) is held three times: the
+//!    boundary. The memory budget ([`StuffingOptions::max_memory`], in tets
+//!    [`StuffingOptions::max_tets`]) is held three times: the
 //!    features' estimate sets a floor on their spacing ([`spacing_floor`], reported in
 //!    [`StuffingStats::spacing_floor`]), a tree or a mesh still over it raises the floor
 //!    and starts again, and a run over it without thin parts to coarsen is refused
@@ -88,25 +89,52 @@ pub struct StuffingOptions {
     /// Lattice spacing (cell size) along the boundary where no sizing feature asks for
     /// less, in the domain's units.
     pub h: f64,
-    /// The budget: the most tets a run may produce (estimated before meshing; default
-    /// [`DEFAULT_MAX_TETS`]). A run estimated above it is refused with the estimate.
-    pub max_tets: usize,
+    /// The memory budget, in bytes (default [`DEFAULT_MAX_MEMORY`]): at most
+    /// [`StuffingOptions::max_tets`] tets, [`BYTES_PER_TET`] each, estimated before the
+    /// lattice is allocated. A run estimated above it is refused with the estimate.
+    pub max_memory: u64,
     /// The quality step raises every tet's smallest dihedral angle to at least this
     /// many degrees where it can (default 10; 0 turns the step off).
     pub min_dihedral_deg: f64,
 }
 
-/// The default tet budget of a volume mesh: 20 million.
-pub const DEFAULT_MAX_TETS: usize = 20_000_000;
+/// The default memory budget of a run: 8 GB (20 million tets at [`BYTES_PER_TET`],
+/// 10 million for each side when both are meshed at once). The wire sphere of the
+/// shared models needs 10.3 million tets (2.6 inside, 7.8 outside; 4.4 GB measured) to
+/// keep its 95 handles and 95 tunnels with the stuffing mesher; at 4 GB it keeps 83
+/// tunnels.
+pub const DEFAULT_MAX_MEMORY: u64 = 8_000_000_000;
+
+/// Bytes of peak memory per volume tet of a whole run (the mesh, its Laplacian and
+/// smoothing, the Morse analysis and the loops): measured 380 on the real models
+/// (`docs/benchmarks.md`, "Real models"), rounded up. Budgets in bytes are turned into
+/// tets with it.
+pub const BYTES_PER_TET: f64 = 400.0;
+
+/// A memory size for messages: `4.00 GB`, `512 MB`, `400 kB` (powers of 1000).
+pub fn memory_text(bytes: f64) -> String {
+    if bytes >= 1e9 {
+        format!("{:.2} GB", bytes / 1e9)
+    } else if bytes >= 1e6 {
+        format!("{:.0} MB", bytes / 1e6)
+    } else {
+        format!("{:.0} kB", bytes / 1e3)
+    }
+}
 
 impl StuffingOptions {
     /// Spacing `h`, the default budget and quality target.
     pub fn new(h: f64) -> Self {
         StuffingOptions {
             h,
-            max_tets: DEFAULT_MAX_TETS,
+            max_memory: DEFAULT_MAX_MEMORY,
             min_dihedral_deg: 10.0,
         }
+    }
+
+    /// The most tets the memory budget allows.
+    pub fn max_tets(&self) -> usize {
+        (self.max_memory as f64 / BYTES_PER_TET) as usize
     }
 }
 
@@ -188,8 +216,11 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     if !(h.is_finite() && h > 0.0) {
         return Err(Error::invalid_argument(format!("h = {h} must be positive")));
     }
-    if options.max_tets == 0 {
-        return Err(Error::invalid_argument("max_tets must be positive"));
+    if options.max_tets() == 0 {
+        return Err(Error::invalid_argument(format!(
+            "max_memory = {} bytes leaves no room for a single tet ({BYTES_PER_TET} bytes)",
+            options.max_memory
+        )));
     }
     let (lo, hi) = domain.bounds();
     if (0..3).any(|k| !(lo[k].is_finite() && hi[k].is_finite() && hi[k] >= lo[k])) {
@@ -204,9 +235,10 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         .collect();
 
     // 1–3. Octree, background lattice, stuffing, within the budget: the finest
-    // spacing the features may ask for is the floor that fits their estimate; a tree
-    // or a mesh still over the budget doubles the floor and starts again.
-    let mut floor = spacing_floor(&features, options);
+    // spacing the features may ask for is the floor that fits their estimate, that
+    // estimate calibrated on an octree; a tree or a mesh still over the budget
+    // coarsens the floor and starts again.
+    let (mut floor, fits) = calibrated_floor(domain, options, &features, lo, hi)?;
     let (lattice, features) = loop {
         let clamped = clamp_spacing(&features, floor);
         match stuff_lattice(domain, options, &clamped, lo, hi) {
@@ -215,11 +247,26 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
                 if floor.is_some_and(|f| f >= h) || clamped.is_empty() {
                     return Err(e);
                 }
-                // Tets grow like the inverse square of the spacing along a surface:
-                // coarsen by the square root of the excess, at least by two.
-                let excess = estimate / options.max_tets as f64;
                 let finest = clamped.iter().map(|f| f.spacing).fold(h, f64::min);
-                floor = Some((finest * excess.sqrt().max(2.0) * 1.1).min(h));
+                floor = Some(match fits {
+                    // Halfway (on a log scale) to the floor whose tree fitted, and that
+                    // floor itself once within 5 % of it.
+                    Some(fits) if fits > finest => {
+                        let between = (fits * finest).sqrt();
+                        if between * 1.05 >= fits {
+                            fits
+                        } else {
+                            between
+                        }
+                    }
+                    // Tets grow like the inverse square of the spacing along a surface:
+                    // coarsen by the square root of the excess (a quarter more at
+                    // least).
+                    _ => {
+                        let excess = estimate / options.max_tets() as f64;
+                        (finest * excess.sqrt().max(1.25) * 1.1).min(h)
+                    }
+                });
             }
             Err(failed) => return Err(failed.error()),
         }
@@ -298,13 +345,23 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     lap(6);
     let mesh = compact(domain, &stuffed.positions, &stuffed.tets, &interior)?;
     if mesh.num_tets() == 0 {
-        return Err(Error::new(
-            ErrorKind::InvalidMesh,
-            format!(
-                "the volume mesh is empty: no lattice vertex at spacing {:.3e} lies inside the region",
-                grid.finest_cell(&tree.octree)
+        let finest = grid.finest_cell(&tree.octree);
+        // Where the budget floored the spacing, the budget is why.
+        return Err(match floor {
+            Some(floor) => Error::new(
+                ErrorKind::OverBudget,
+                format!(
+                    "the volume mesh is empty: the memory budget of {} allows no cells below {floor:.3e}, and no lattice vertex at that spacing lies inside the region: raise it with --max-memory",
+                    memory_text(options.max_memory as f64)
+                ),
             ),
-        ));
+            None => Error::new(
+                ErrorKind::InvalidMesh,
+                format!(
+                    "the volume mesh is empty: no lattice vertex at spacing {finest:.3e} lies inside the region"
+                ),
+            ),
+        });
     }
 
     Ok(VolumeMesh {
@@ -333,6 +390,40 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             seconds,
         },
     })
+}
+
+/// The floor on the features' spacing that fits the budget. The features' own
+/// estimate ([`spacing_floor`]) counts every feature's region whole, where neighbours'
+/// regions overlap and half of them lie on the other side of the surface: at the floor
+/// it set for 20 million tets, the octree counted 4.0 million inside the wire sphere,
+/// 6.7 million outside it and 0.54 million inside `ps_mk3s_gantry.stl`, so a floor from
+/// it alone binds where the budget has room. Where it binds, the octree at that floor
+/// (which fits the budget, the estimate being high) gives the ratio of its count to the
+/// estimate's, and the floor is found again with the estimate scaled by it (never
+/// below the ratio of 1/16). `None`: no floor needed. Also the floor whose octree was
+/// seen to fit, if any.
+fn calibrated_floor(
+    domain: &dyn Domain,
+    options: &StuffingOptions,
+    features: &[SizingFeature],
+    lo: [f64; 3],
+    hi: [f64; 3],
+) -> Result<(Option<f64>, Option<f64>)> {
+    let Some(floor) = spacing_floor(features, options) else {
+        return Ok((None, None));
+    };
+    let clamped = clamp_spacing(features, Some(floor));
+    let grid = Grid::new(lo, hi, options.h, &clamped)?;
+    let tree = match build_octree(domain, &grid, &clamped, options) {
+        Ok(tree) => tree,
+        Err(Failed::OverBudget(..)) => return Ok((Some(floor), None)),
+        Err(Failed::Other(e)) => return Err(e),
+    };
+    let estimate = sizing::feature_estimate(features, floor);
+    // A tenth more than the tree counted: the ratio grows a little as the floor falls.
+    let ratio = (1.1 * tree.estimated_tets as f64 / estimate).clamp(1.0 / 16.0, 1.0);
+    let calibrated = sizing::spacing_floor_scaled(features, options, ratio).map(|f| f.min(floor));
+    Ok((calibrated, Some(floor)))
 }
 
 /// Steps 1 to 3 with the given features: the octree, its background lattice, the
@@ -385,10 +476,10 @@ fn stuff_lattice(
         &background.tets,
     );
     lap(3);
-    if stuffed.tets.len() > options.max_tets {
+    if stuffed.tets.len() > options.max_tets() {
         return Err(over_budget(
             stuffed.tets.len() as f64,
-            options.max_tets,
+            options,
             grid.finest_cell(&tree.octree),
         ));
     }
@@ -516,13 +607,15 @@ impl Failed {
     }
 }
 
-fn over_budget(estimate: f64, budget: usize, finest: f64) -> Failed {
+fn over_budget(estimate: f64, options: &StuffingOptions, finest: f64) -> Failed {
     Failed::OverBudget(
         estimate,
         Error::new(
             ErrorKind::OverBudget,
             format!(
-                "the volume mesh would have about {estimate:.2e} tets (smallest cells {finest:.2e}), over the budget of {budget} tets: raise it with --max-tets, or pass a larger --h"
+                "the volume mesh would have about {estimate:.2e} tets (smallest cells {finest:.2e}), about {} at {BYTES_PER_TET} bytes a tet, over the memory budget of {}: raise it with --max-memory, or pass a larger --h",
+                memory_text(estimate * BYTES_PER_TET),
+                memory_text(options.max_memory as f64)
             ),
         ),
     )
@@ -539,9 +632,10 @@ fn build_octree(
 ) -> std::result::Result<Tree, Failed> {
     let h = grid.h;
     let coarsest = domain.coarsest_spacing(h).max(h);
-    // Every cell of a level becomes a leaf or splits into more, and about half of the
-    // leaves lie inside: past this many the tree is over the budget whatever follows.
-    let max_leaves = (options.max_tets as f64 / (0.5 * TETS_PER_LEAF)) as usize + 1;
+    // Leaves not wholly outside give at least half a leaf's tets each: past this many
+    // the tree is over the budget whatever follows. (Leaves wholly outside give none:
+    // inside a thin solid most of the tree is outside it.)
+    let max_leaves = (options.max_tets() as f64 / (0.5 * TETS_PER_LEAF)) as usize + 1;
     let mut leaves_so_far = 0usize;
     let mut too_big: Option<usize> = None;
     let mut dead: HashSet<Cell> = HashSet::default();
@@ -549,8 +643,7 @@ fn build_octree(
     let mut lists = sizing::FeatureLists::new(features, grid.root, h);
     let to_point = |k: Key| grid.point(k);
     let octree = Octree::build(grid.root, |cells| {
-        if too_big.is_some() || leaves_so_far + cells.len() > max_leaves {
-            too_big = too_big.or(Some(leaves_so_far + cells.len()));
+        if too_big.is_some() {
             return vec![false; cells.len()];
         }
         let centres: Vec<[f64; 3]> = cells.iter().map(|c| grid.point(c.center())).collect();
@@ -584,7 +677,17 @@ fn build_octree(
                 size > wanted * (1.0 + 1e-9)
             })
             .collect();
-        leaves_so_far += decisions.iter().filter(|&&d| !d).count();
+        leaves_so_far += cells
+            .iter()
+            .zip(&decisions)
+            .filter(|&(cell, &split)| !split && !dead.contains(cell))
+            .count();
+        // The next level has eight cells for each split one; a level of more cells
+        // than sixteen times the leaves allowed is not built.
+        let next = 8 * decisions.iter().filter(|&&d| d).count();
+        if leaves_so_far > max_leaves || next > 16 * max_leaves {
+            too_big = Some(leaves_so_far.max(next / 16));
+        }
         decisions
     });
     let leaves = octree.leaves();
@@ -606,10 +709,10 @@ fn build_octree(
     );
     if let Some(cells) = too_big {
         let estimate = 0.5 * TETS_PER_LEAF * cells as f64;
-        return Err(over_budget(estimate, options.max_tets, finest));
+        return Err(over_budget(estimate, options, finest));
     }
-    if estimated_tets > options.max_tets {
-        return Err(over_budget(estimated_tets as f64, options.max_tets, finest));
+    if estimated_tets > options.max_tets() {
+        return Err(over_budget(estimated_tets as f64, options, finest));
     }
     Ok(Tree {
         leaves: leaves.len(),

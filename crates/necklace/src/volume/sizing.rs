@@ -187,7 +187,7 @@ impl<'a> FeatureLists<'a> {
 /// refines divided by its cells' volume. About half of those cells are inside, but the
 /// octree's grading around them adds about as many again, and the tree's own guard
 /// counts leaves (see `build_octree`), so the estimate counts all of them.
-fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
+pub(super) fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
     features
         .iter()
         .map(|f| {
@@ -205,24 +205,35 @@ fn feature_estimate(features: &[SizingFeature], floor: f64) -> f64 {
 /// log scale between their finest spacing and `h`. [`stuff_volume`](super::stuff_volume) applies it; a
 /// caller may ask first, to see which parts the budget leaves unresolved.
 pub fn spacing_floor(features: &[SizingFeature], options: &StuffingOptions) -> Option<f64> {
-    let (budget, h) = (options.max_tets as f64, options.h);
+    spacing_floor_scaled(features, options, 1.0)
+}
+
+/// [`spacing_floor`] with the features' estimate multiplied by `scale` (what an octree
+/// counted against it: `volume::calibrated_floor`).
+pub(super) fn spacing_floor_scaled(
+    features: &[SizingFeature],
+    options: &StuffingOptions,
+    scale: f64,
+) -> Option<f64> {
+    let (budget, h) = (options.max_tets() as f64, options.h);
     let features: Vec<SizingFeature> = features
         .iter()
         .filter(|f| f.is_valid() && f.spacing < h)
         .copied()
         .collect();
     let features = &features[..];
-    if features.is_empty() || feature_estimate(features, 0.0) <= budget {
+    let estimate = |floor: f64| scale * feature_estimate(features, floor);
+    if features.is_empty() || estimate(0.0) <= budget {
         return None;
     }
     let finest = features.iter().map(|f| f.spacing).fold(h, f64::min);
-    if feature_estimate(features, h) > budget {
+    if estimate(h) > budget {
         return Some(h);
     }
     let (mut lo, mut hi) = (finest.ln(), h.ln());
     for _ in 0..40 {
         let mid = 0.5 * (lo + hi);
-        if feature_estimate(features, mid.exp()) > budget {
+        if estimate(mid.exp()) > budget {
             lo = mid;
         } else {
             hi = mid;

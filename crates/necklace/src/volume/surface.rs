@@ -40,7 +40,7 @@ use super::surface_sizing::{
 };
 use super::{
     spacing_floor, stuff_volume, SharpFeatures, Shell, SizingFeature, StuffingOptions,
-    StuffingStats, SurfaceInside, VolumeMesh, DEFAULT_MAX_TETS,
+    StuffingStats, SurfaceInside, VolumeMesh, DEFAULT_MAX_MEMORY,
 };
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
@@ -70,9 +70,13 @@ pub struct VolumeOptions {
     /// Outer sphere radius as a multiple of the bounding box's half diagonal (default
     /// 1.5), centred at the box centre.
     pub sphere_scale: f64,
-    /// The most tets the mesh may have (default 20 million): a run estimated above it
-    /// is refused with the estimate, and refinement for topology stops at it.
-    pub max_tets: usize,
+    /// The memory budget of the mesh, in bytes (default 8 GB): tets at
+    /// [`BYTES_PER_TET`](super::BYTES_PER_TET) each. Thin parts are not refined past
+    /// it (a warning gives the floor), refinement for topology stops at it, and a mesh
+    /// estimated above it even so is refused with the estimate, before the lattice is
+    /// allocated. A run that meshes both sides gives each half
+    /// (`pipeline::NeckOptions`).
+    pub max_memory: u64,
     /// The quality step's target smallest dihedral angle, degrees (default 10).
     pub min_dihedral_deg: f64,
 }
@@ -83,7 +87,7 @@ impl Default for VolumeOptions {
             mesher: Mesher::Stuffing,
             h: None,
             sphere_scale: 1.5,
-            max_tets: DEFAULT_MAX_TETS,
+            max_memory: DEFAULT_MAX_MEMORY,
             min_dihedral_deg: 10.0,
         }
     }
@@ -461,8 +465,9 @@ pub fn volume_mesh_surveyed(
     if let Some(s) = stats {
         if let Some(floor) = s.spacing_floor {
             warnings.push(format!(
-                "the tet budget ({} tets) kept cells of the {} volume mesh from going below {floor:.3e}: parts or gaps thinner than {:.3e} may have lost their topology (raise --max-tets)",
-                options.max_tets,
+                "the memory budget of the {2} volume mesh ({0}, {1:.2e} tets; a run that meshes both sides gives each half of --max-memory) kept its cells from going below {floor:.3e}: parts or gaps thinner than {3:.3e} may have lost their topology (raise --max-memory)",
+                super::memory_text(options.max_memory as f64),
+                options.max_memory as f64 / super::BYTES_PER_TET,
                 side.name(),
                 CELLS_ACROSS * floor
             ));
@@ -603,7 +608,7 @@ fn stuff_surface(
     let mut spacing = spacing.clone();
     let stuffing = StuffingOptions {
         h,
-        max_tets: options.max_tets,
+        max_memory: options.max_memory,
         min_dihedral_deg: options.min_dihedral_deg,
     };
     if sphere.is_none() {
@@ -664,7 +669,7 @@ fn mesh_until_topology_matches(
             Ok(next) => next,
             Err(e) if e.kind() == ErrorKind::OverBudget => {
                 warnings.push(format!(
-                    "refinement for topology stopped at the tet budget: {}",
+                    "refinement for topology stopped at the memory budget: {}",
                     e.message()
                 ));
                 break;
@@ -699,8 +704,9 @@ fn refuse_if_all_below_floor(
         return Err(Error::new(
             ErrorKind::OverBudget,
             format!(
-                "every part of the solid is thinner than {thickest:.3e}, but the budget of {} tets allows no cells below {floor:.3e}: raise it with --max-tets",
-                options.max_tets
+                "every part of the solid is thinner than {thickest:.3e}, but the memory budget of {} ({} tets) allows no cells below {floor:.3e}: raise it with --max-memory",
+                super::memory_text(options.max_memory as f64),
+                options.max_tets()
             ),
         ));
     }

@@ -6,7 +6,7 @@ use crate::common::{sphere, union, Inside};
 
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::tet::{ComponentTopology, TetTopology};
-use necklace::volume::{expected_topology, volume_mesh, VolumeOptions};
+use necklace::volume::{expected_topology, volume_mesh, VolumeOptions, BYTES_PER_TET};
 use necklace::volume::{stuff_volume, StuffingOptions};
 use necklace::Side;
 use necklace::{ErrorKind, SurfaceMesh};
@@ -173,7 +173,8 @@ fn valid_or_refused(surface: &SurfaceMesh, side: Side, options: &VolumeOptions) 
             let m = &v.mesh;
             assert!(m.num_tets() > 0);
             assert!((0..m.num_tets()).all(|t| m.tet_volume(t) > 0.0));
-            assert!(m.num_tets() <= options.max_tets, "{} tets", m.num_tets());
+            let max_tets = options.max_memory as f64 / BYTES_PER_TET;
+            assert!(m.num_tets() as f64 <= max_tets, "{} tets", m.num_tets());
             // Whatever the budget left unresolved is said.
             if v.topology.matches != Some(true) {
                 assert!(!v.warnings.is_empty(), "{side:?}: {:?}", v.topology);
@@ -183,7 +184,7 @@ fn valid_or_refused(surface: &SurfaceMesh, side: Side, options: &VolumeOptions) 
             let text = e.to_string();
             assert!(!text.contains('\n'), "{text}");
             assert!(
-                e.kind() == ErrorKind::OverBudget && text.contains("--max-tets"),
+                e.kind() == ErrorKind::OverBudget && text.contains("--max-memory"),
                 "{side:?}: {text}"
             );
         }
@@ -195,7 +196,7 @@ fn a_needle_and_a_thin_plate_give_a_valid_mesh_or_a_one_line_refusal() {
     // A needle 10⁵ times longer than thick, and a plate 10⁻⁷ thick; a small budget
     // keeps the test quick (the default one behaves the same, later).
     let options = VolumeOptions {
-        max_tets: 2_000_000,
+        max_memory: (2e6 * BYTES_PER_TET) as u64,
         ..VolumeOptions::default()
     };
     let needle = cuboid([0.0; 3], [1.0, 1e-5, 1e-5]);
@@ -213,20 +214,21 @@ fn a_needle_and_a_thin_plate_give_a_valid_mesh_or_a_one_line_refusal() {
 #[test]
 fn a_mesh_over_the_budget_is_refused_with_its_estimate() {
     let ball = sphere(1.0, [0.0; 3], 16.0);
+    // 1000 tets' worth of memory.
     let options = VolumeOptions {
-        max_tets: 1000,
+        max_memory: (1000.0 * BYTES_PER_TET) as u64,
         ..VolumeOptions::default()
     };
     let err = volume_mesh(&ball, Side::Inside, &options).unwrap_err();
     assert_eq!(err.kind(), ErrorKind::OverBudget);
     let text = err.to_string();
     assert!(
-        text.contains("tets") && text.contains("1000") && text.contains("--max-tets"),
+        text.contains("tets") && text.contains("400 kB") && text.contains("--max-memory"),
         "{text}"
     );
     // And the budget never lets a mesh through above it.
     let options = VolumeOptions {
-        max_tets: 50_000,
+        max_memory: (50_000.0 * BYTES_PER_TET) as u64,
         ..VolumeOptions::default()
     };
     if let Ok(v) = volume_mesh(&ball, Side::Inside, &options) {
@@ -289,7 +291,7 @@ fn a_side_that_fails_stops_the_other_and_its_error_is_the_runs() {
     let plate = cuboid([0.0; 3], [1.0, 1.0, 1e-4]);
     let options = NeckOptions {
         volume: VolumeOptions {
-            max_tets: 400_000,
+            max_memory: (400_000.0 * BYTES_PER_TET) as u64,
             ..VolumeOptions::default()
         },
         ..NeckOptions::default()
