@@ -20,8 +20,6 @@
 //! non-manifold or degenerate corner, and those whose samples disagree (a coplanar part
 //! touching them) leave the sign to the winding number at `p`.
 
-use std::collections::HashMap;
-
 use rayon::prelude::*;
 
 use super::bvh::Bvh;
@@ -103,7 +101,7 @@ impl Pseudonormals {
             _ if manifold => return Some(Self::build(mesh, bvh, &topology, &face_normals, None)),
             _ => return None,
         };
-        if !is_closed_chain(mesh) {
+        if !is_closed_chain(mesh, &topology) {
             return None;
         }
         // The crossing triangles and the ring round them.
@@ -216,17 +214,22 @@ impl Pseudonormals {
 }
 
 /// Whether every edge is used as often in one direction as in the other: then the
-/// triangles bound, and the winding number is an integer off the surface.
-fn is_closed_chain(mesh: &SurfaceMesh) -> bool {
-    let mut balance: HashMap<[u32; 2], i32> = HashMap::with_capacity(3 * mesh.triangles.len());
-    for t in &mesh.triangles {
-        for i in 0..3 {
-            let (a, b) = (t[i], t[(i + 1) % 3]);
-            let (key, step) = if a < b { ([a, b], 1) } else { ([b, a], -1) };
-            *balance.entry(key).or_insert(0) += step;
+/// triangles bound, and the winding number is an integer off the surface. (A
+/// degenerate triangle's self-loop side has no edge, and uses none.)
+fn is_closed_chain(mesh: &SurfaceMesh, topology: &Topology) -> bool {
+    let mut balance = vec![0i32; topology.num_edges()];
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for (i, &start) in t.iter().enumerate() {
+            if let Some(e) = topology.face_edge(f, i) {
+                balance[e] += if start == topology.edges()[e][0] {
+                    1
+                } else {
+                    -1
+                };
+            }
         }
     }
-    balance.values().all(|&b| b == 0)
+    balance.iter().all(|&b| b == 0)
 }
 
 /// The signs just in front of triangle `tri` (unit normal `n`) and just behind it, from

@@ -22,9 +22,9 @@
 //!    where they reach (thin parts and gaps: no fixed floor), and coarser away from the
 //!    boundary. The memory budget ([`StuffingOptions::max_memory`], in tets
 //!    [`StuffingOptions::max_tets`]) is held three times: the
-//!    features' estimate sets a floor on their spacing ([`spacing_floor`], reported in
-//!    [`StuffingStats::spacing_floor`]), a tree or a mesh still over it raises the floor
-//!    and starts again, and a run over it without thin parts to coarsen is refused
+//!    features' estimate, calibrated on one octree, sets a floor on their spacing
+//!    ([`spacing_floor`], `calibrated_floor`; reported in [`StuffingStats::spacing_floor`]),
+//!    a tree or a mesh still over it raises the floor and starts again, and a run over it without thin parts to coarsen is refused
 //!    with the figure.
 //! 2. `background`: the octree's BCC tetrahedralisation (graded, conforming).
 //! 3. `stuffing`: domain values at the lattice vertices, cut points on sign-changing
