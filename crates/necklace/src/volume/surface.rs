@@ -17,15 +17,19 @@
 //!    there: the medial distance, which sees a wire's diameter where the ray sees a
 //!    chord) and asks for cells half of that wherever it is below `2h`
 //!    ([`SizingFeature`]s over the thin triangles, reaching into the part; no fixed
-//!    floor: the tet budget sets it). Folds of the surface and places where it crosses
-//!    itself are not parts, and are skipped;
+//!    floor: the memory budget sets it). Folds of the surface and places where it
+//!    crosses itself are not parts, and are skipped;
 //! 3. finds the creases and corners for the mesher to snap its boundary onto;
-//! 4. meshes (`volume::stuff_volume`), compares the mesh's topology with the
-//!    prediction, and where they differ refines where the mesh shows why (pinches,
-//!    swallowed boundary vertices, and surface vertices the mesh's boundary does not
-//!    come near) and meshes again, up to [`MAX_ROUNDS`] times, keeping the mesh closest
-//!    to the prediction. A difference that remains, or a budget that bound, is reported
-//!    in [`VolumeResult::warnings`] with the figures, never dropped.
+//! 4. meshes (`volume::stuff_volume`) and compares the mesh's topology with the
+//!    prediction. Where they differ, it meshes again sized by the thickness sampled over
+//!    the triangles too (`surface_sizing::sample_thickness`: long triangles, and where
+//!    it changes between corners, such as a plate's thin rim drawn with triangles that
+//!    reach across the plate; made once, for the first side that asks), then refines
+//!    where the mesh shows why (pinches, swallowed boundary vertices, and surface
+//!    vertices the mesh's boundary does not come near) and meshes again, up to
+//!    [`MAX_ROUNDS`] meshings, keeping the mesh closest to the prediction. A difference
+//!    that remains, or a budget that bound, is reported in [`VolumeResult::warnings`]
+//!    with the figures, never dropped.
 //!
 //! Conventions: lengths in the surface's units; the outer sphere of a shell is centred
 //! at the bounding box's centre with radius `sphere_scale` × half its diagonal.
@@ -36,7 +40,8 @@ use serde::{Deserialize, Serialize};
 
 use super::prediction::predict;
 use super::surface_sizing::{
-    sharp_features, thickness, thin_part_sizing, CELLS_ACROSS, THIN_FACTOR,
+    sample_thickness, sharp_features, thickness, thin_part_sizing, ThicknessSamples, CELLS_ACROSS,
+    MAX_SAMPLES, THIN_FACTOR,
 };
 use super::{
     spacing_floor, stuff_volume, SharpFeatures, Shell, SizingFeature, StuffingOptions,
@@ -93,9 +98,9 @@ impl Default for VolumeOptions {
     }
 }
 
-/// Most meshings of one side: the first, and refinements while the topology differs
-/// from the surface's.
-pub const MAX_ROUNDS: usize = 4;
+/// Most meshings of one side: the first, the one sized by the sampled thickness, and
+/// refinements while the topology differs from the surface's.
+pub const MAX_ROUNDS: usize = 5;
 
 /// Cells along the curve where the surface crosses itself are this many times finer
 /// than `h`.
@@ -125,6 +130,10 @@ pub struct VolumeResult {
     pub stats: Option<StuffingStats>,
     /// Surface vertices whose part or gap is thinner than `2h`.
     pub thin_vertices: usize,
+    /// Points on the surface's triangles where the thickness was measured besides
+    /// its vertices (long triangles, and where it changes between corners), when the
+    /// mesh was sized by them; 0 when sized by the vertices alone.
+    pub thickness_samples: usize,
     /// The topology predicted from the surface and the one found.
     pub topology: TopologyCheck,
     /// Largest distance of a surface-kind vertex to the input surface, divided by the
@@ -204,6 +213,9 @@ pub struct VolumeReport {
     pub finest_cell: f64,
     /// Surface vertices whose part or gap is thinner than `2h`.
     pub thin_vertices: usize,
+    /// Points on the surface's triangles where the thickness was measured besides
+    /// its vertices, when the mesh was sized by them (else 0).
+    pub thickness_samples: usize,
     /// The stuffing mesher's counts (last round; absent for TetGen).
     pub stuffing: Option<StuffingStats>,
     /// One line per thing to know (see [`VolumeResult::warnings`]).
@@ -258,6 +270,7 @@ impl VolumeResult {
             h: self.h,
             finest_cell: self.stats.map_or(0.0, |s| s.finest_cell),
             thin_vertices: self.thin_vertices,
+            thickness_samples: self.thickness_samples,
             stuffing: self.stats,
             warnings: self.warnings.clone(),
             seconds: self.seconds,
@@ -324,8 +337,19 @@ struct SurfaceSizing {
     thickness: Vec<[f64; 2]>,
     /// Per vertex, the cell size asked for (half the thinner of the two, at most `h`).
     spacing: Vec<f64>,
-    /// Thin parts, gaps and the crossing curve as sizing features.
+    /// Thin parts and gaps as measured at the vertices, and the crossing curve, as
+    /// sizing features.
     sizing: Vec<SizingFeature>,
+    /// The crossing curve's sizing features alone.
+    crossing_sizing: Vec<SizingFeature>,
+    /// Vertices whose thickness is not measured (at crossings).
+    skip: Vec<bool>,
+    /// The thickness limit (`THIN_FACTOR` × h).
+    limit: f64,
+    /// The sizing by the thickness sampled over the triangles too, the number of
+    /// points added, and whether their bound stopped the sampling: made the first
+    /// time a side asks (its vertices' sizing gave another topology), then shared.
+    sampled: std::sync::OnceLock<(Vec<SizingFeature>, usize, bool)>,
     /// Creases, corners and the crossing curve to snap onto.
     features: SharpFeatures,
 }
@@ -407,10 +431,10 @@ pub fn volume_mesh_surveyed(
         ));
         None
     };
-    let (mesh, found, stats, rounds) = match &survey.sizing {
+    let (mesh, found, stats, rounds, samples) = match &survey.sizing {
         Some(sizing) => {
             let sphere = (side == Side::Outside).then_some((centre, radius));
-            let (stuffed, found, rounds) = stuff_surface(
+            let (stuffed, found, rounds, samples) = stuff_surface(
                 surface,
                 distance,
                 sizing,
@@ -420,12 +444,12 @@ pub fn volume_mesh_surveyed(
                 &expected,
                 &mut warnings,
             )?;
-            (stuffed.mesh, found, Some(stuffed.stats), rounds)
+            (stuffed.mesh, found, Some(stuffed.stats), rounds, samples)
         }
         None => {
             let mesh = tetgen_mesh(surface, side, centre, radius)?;
             let found = mesh.topology();
-            (mesh, found, None, 1)
+            (mesh, found, None, 1, 0)
         }
     };
     if mesh.num_tets() == 0 {
@@ -493,6 +517,7 @@ pub fn volume_mesh_surveyed(
         mesher: options.mesher,
         stats,
         thin_vertices: survey.thin_vertices,
+        thickness_samples: samples,
         topology: TopologyCheck {
             expected,
             found,
@@ -569,25 +594,56 @@ fn size_surface(
         .collect();
     let mut features = sharp_features(surface, &topology);
     features.edges.extend(&crossing_curve);
-    let mut sizing = thin_part_sizing(surface, &thickness);
     let crease_cell = h / CROSSING_REFINEMENT;
-    sizing.extend(crossing_curve.iter().map(|&[p, q]| SizingFeature {
-        corners: [p, q, q],
-        spacing: crease_cell,
-        reach: 2.0 * crease_cell,
-        toward: [0.0; 3],
-    }));
+    let crossing_sizing: Vec<SizingFeature> = crossing_curve
+        .iter()
+        .map(|&[p, q]| SizingFeature {
+            corners: [p, q, q],
+            spacing: crease_cell,
+            reach: 2.0 * crease_cell,
+            toward: [0.0; 3],
+        })
+        .collect();
+    let mut sizing = thin_part_sizing(&ThicknessSamples::at_vertices(surface, &thickness));
+    sizing.extend(&crossing_sizing);
     SurfaceSizing {
+        sizing,
+        crossing_sizing,
+        skip: crossing,
+        limit: THIN_FACTOR * h,
+        sampled: std::sync::OnceLock::new(),
         thickness,
         spacing,
-        sizing,
         features,
+    }
+}
+
+impl SurfaceSizing {
+    /// The sizing by the thickness sampled over the triangles ([`sample_thickness`]),
+    /// with the crossing curve's; the points added, and whether their bound stopped it.
+    fn sampled(
+        &self,
+        surface: &SurfaceMesh,
+        distance: &SurfaceDistance,
+    ) -> &(Vec<SizingFeature>, usize, bool) {
+        self.sampled.get_or_init(|| {
+            let samples =
+                sample_thickness(surface, distance, &self.thickness, &self.skip, self.limit);
+            let mut sizing = thin_part_sizing(&samples);
+            sizing.extend(&self.crossing_sizing);
+            (
+                sizing,
+                samples.positions.len() - surface.num_vertices(),
+                samples.bound,
+            )
+        })
     }
 }
 
 /// The stuffing mesher on one side of a sized surface (`sphere`: the outer sphere's
 /// centre and radius for the shell, `None` inside): meshings until the topology
-/// matches. Returns the mesh, its topology and the rounds.
+/// matches ([`mesh_until_topology_matches`]). Returns the mesh, its topology, the
+/// meshings and the thickness samples it was sized by (0: the vertices alone).
 #[allow(clippy::too_many_arguments)]
 fn stuff_surface(
     surface: &SurfaceMesh,
@@ -598,66 +654,103 @@ fn stuff_surface(
     options: &VolumeOptions,
     expected: &Option<TetTopology>,
     warnings: &mut Vec<String>,
-) -> Result<(VolumeMesh, TetTopology, usize)> {
-    let SurfaceSizing {
-        thickness,
-        spacing,
-        sizing,
-        features,
-    } = surveyed;
-    let mut spacing = spacing.clone();
+) -> Result<(VolumeMesh, TetTopology, usize, usize)> {
+    let mut spacing = surveyed.spacing.clone();
     let stuffing = StuffingOptions {
         h,
         max_memory: options.max_memory,
         min_dihedral_deg: options.min_dihedral_deg,
     };
     if sphere.is_none() {
-        refuse_if_all_below_floor(sizing, thickness, &stuffing)?;
+        refuse_if_all_below_floor(&surveyed.sizing, &surveyed.thickness, &stuffing)?;
     }
     let bounds = surface.bounding_box().unwrap_or_default();
-    // One meshing with the surface's sizing and `extra` (refinements from earlier
-    // rounds), inside or in the shell.
-    let stuff = |extra: &[SizingFeature]| {
+    // One meshing with the vertices' sizing or the sampled one, and `extra`
+    // (refinements from earlier rounds), inside or in the shell.
+    let stuff = |sampled: bool, extra: &[SizingFeature]| {
+        let sizing = if sampled {
+            &surveyed.sampled(surface, distance).0
+        } else {
+            &surveyed.sizing
+        };
         let inside = SurfaceInside {
             distance,
             bounds,
             sizing: sizing.iter().chain(extra).copied().collect(),
-            features: features.clone(),
+            features: surveyed.features.clone(),
         };
         match sphere {
             None => stuff_volume(&inside, &stuffing),
             Some((centre, radius)) => stuff_volume(&Shell::new(inside, centre, radius), &stuffing),
         }
     };
-    let (stuffed, found, rounds) =
+    let (stuffed, found, rounds, sampled) =
         mesh_until_topology_matches(surface, &stuff, &mut spacing, expected, warnings)?;
-    Ok((stuffed, found, rounds))
+    let samples = if sampled {
+        let (_, samples, bound) = *surveyed.sampled(surface, distance);
+        if bound {
+            warnings.push(format!(
+                "the thickness sampled over the triangles stopped at {samples} points (the bound is {MAX_SAMPLES}): the triangles left are sized by their corners"
+            ));
+        }
+        samples
+    } else {
+        0
+    };
+    Ok((stuffed, found, rounds, samples))
 }
 
-/// Mesh, compare with the prediction, refine where the mesh shows a feature below the
-/// resolution, and mesh again while the topology differs (at most [`MAX_ROUNDS`]
-/// meshings), keeping the mesh closest to the prediction; a round that moves away from
-/// it ends the rounds. `spacing[v]` is the cell size asked for at surface vertex `v`
-/// (halved where a round refines). A refinement the budget refuses ends the rounds with
-/// the best mesh so far, and says so in `warnings`.
+/// Mesh, compare with the prediction, and while the topology differs: mesh again sized
+/// by the thickness sampled over the triangles (`stuff(true, ..)`: where the vertices
+/// alone miss a thin part between them, or spread a thin rim's cells over long
+/// triangles), then refine where the mesh shows a feature below the resolution (at
+/// most [`MAX_ROUNDS`] meshings), keeping the mesh closest to the prediction; a round
+/// that moves away from it ends the rounds. `spacing[v]` is the cell size asked for at
+/// surface vertex `v` (halved where a round refines). A meshing the budget refuses ends
+/// the rounds with the best mesh so far, and says so in `warnings`. Returns the mesh,
+/// its topology, the meshings, and whether it was sized by the samples.
 fn mesh_until_topology_matches(
     surface: &SurfaceMesh,
-    stuff: &dyn Fn(&[SizingFeature]) -> Result<VolumeMesh>,
+    stuff: &dyn Fn(bool, &[SizingFeature]) -> Result<VolumeMesh>,
     spacing: &mut [f64],
     expected: &Option<TetTopology>,
     warnings: &mut Vec<String>,
-) -> Result<(VolumeMesh, TetTopology, usize)> {
-    let stuffed = stuff(&[])?;
+) -> Result<(VolumeMesh, TetTopology, usize, bool)> {
+    let stuffed = stuff(false, &[])?;
     let found = stuffed.mesh.topology();
     let Some(expected) = expected else {
-        return Ok((stuffed, found, 1));
+        return Ok((stuffed, found, 1, false));
     };
     let mut best_distance = topology_distance(&found, expected);
-    // Where the budget already floors the spacing, finer cells are out of reach.
-    let floored = stuffed.stats.spacing_floor.is_some();
-    let mut best = (stuffed, found);
-    let mut extra = Vec::new();
+    let mut best = (stuffed, found, false);
     let mut rounds = 1;
+    let budget_stop = |warnings: &mut Vec<String>, e: &Error| {
+        warnings.push(format!(
+            "refinement for topology stopped at the memory budget: {}",
+            e.message()
+        ))
+    };
+    if best_distance > 0 {
+        // Tried even where the budget floored the first: the sampled sizing may ask
+        // for fewer cells (a rim's over its own area only).
+        rounds += 1;
+        match stuff(true, &[]) {
+            Ok(next) => {
+                let found = next.mesh.topology();
+                let distance = topology_distance(&found, expected);
+                if distance < best_distance {
+                    best_distance = distance;
+                    best = (next, found, true);
+                }
+            }
+            Err(e) if e.kind() == ErrorKind::OverBudget => budget_stop(warnings, &e),
+            Err(e) => return Err(e),
+        }
+    }
+    // Where the budget already floors the spacing, finer cells are out of reach.
+    let floored = best.0.stats.spacing_floor.is_some();
+    let sampled = best.2;
+    let mut extra = Vec::new();
     while best_distance > 0 && rounds < MAX_ROUNDS && !floored {
         let refine = unresolved_features(surface, &best.0, spacing);
         if refine.is_empty() {
@@ -665,13 +758,10 @@ fn mesh_until_topology_matches(
         }
         extra.extend(refine);
         rounds += 1;
-        let next = match stuff(&extra) {
+        let next = match stuff(sampled, &extra) {
             Ok(next) => next,
             Err(e) if e.kind() == ErrorKind::OverBudget => {
-                warnings.push(format!(
-                    "refinement for topology stopped at the memory budget: {}",
-                    e.message()
-                ));
+                budget_stop(warnings, &e);
                 break;
             }
             Err(e) => return Err(e),
@@ -683,10 +773,10 @@ fn mesh_until_topology_matches(
         }
         if distance < best_distance {
             best_distance = distance;
-            best = (next, found);
+            best = (next, found, sampled);
         }
     }
-    Ok((best.0, best.1, rounds))
+    Ok((best.0, best.1, rounds, best.2))
 }
 
 /// Refuse at once when the budget floors the spacing above the thickness of every part

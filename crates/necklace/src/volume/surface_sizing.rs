@@ -40,13 +40,10 @@ const CREASE_DEG: f64 = 40.0;
 const MEDIAL_STEPS: usize = 8;
 
 /// For each surface vertex (but those marked `skip`), the thickness of the solid and the
-/// width of the gap in front of it, each when below `limit` (else infinity). On each
-/// side, a ray along the vertex normal looks for the other wall within `limit`;
-/// where it finds one, the thickness is the diameter of the largest ball touching the
-/// surface at the vertex whose other contact lies across the part (shrinking-ball
-/// medial distance, started from the ray's chord), or the chord where no ball tells. A
-/// contact or hit on a triangle at the vertex does not count, nor a thickness below
-/// 1/[`FOLD_RATIO`] of the vertex's shortest edge (a fold, not a part).
+/// width of the gap in front of it, each when below `limit` (else infinity), by
+/// [`measure`] along the vertex normal. A contact or hit on a triangle at the vertex
+/// does not count, nor a thickness below 1/[`FOLD_RATIO`] of the vertex's shortest edge
+/// (a fold, not a part).
 pub(super) fn thickness(
     surface: &SurfaceMesh,
     topology: &Topology,
@@ -55,19 +52,12 @@ pub(super) fn thickness(
     limit: f64,
 ) -> Vec<[f64; 2]> {
     use rayon::prelude::*;
-    let mut normals = vec![[0.0; 3]; surface.num_vertices()];
-    for f in 0..surface.num_triangles() {
-        let n = surface.face_normal_scaled(f);
-        for &v in &surface.triangles[f] {
-            normals[v as usize] = add(normals[v as usize], n);
-        }
-    }
+    let normals = vertex_normals(surface);
     (0..surface.num_vertices())
         .into_par_iter()
         .map(|v| {
-            let len = norm(normals[v]);
             let faces = topology.vertex_faces(v);
-            if faces.is_empty() || skip[v] || len.is_nan() || len <= 0.0 {
+            if faces.is_empty() || skip[v] || normals[v] == [0.0; 3] {
                 return [f64::INFINITY; 2];
             }
             let p = surface.positions[v];
@@ -86,28 +76,262 @@ pub(super) fn thickness(
                     .get(face as usize)
                     .is_some_and(|t| !t.contains(&v32))
             };
-            [-1.0, 1.0].map(|direction| {
-                let d = scale(normals[v], direction / len);
-                // A ray that meets no other wall within the limit leaves room for a ball
-                // of the limit's diameter: not thin on this side.
-                let Some((hit, face)) = distance.ray_hit(p, d, limit) else {
-                    return f64::INFINITY;
-                };
-                if !far(face) {
-                    return f64::INFINITY;
-                }
-                // The ball's diameter is the thickness across a plate or a wire whatever
-                // the vertex normal (the ray's chord is only a bound on it).
-                let ball = 2.0 * medial_radius(distance, p, d, 0.5 * hit, &far);
-                let t = if ball.is_finite() { ball } else { hit };
-                if t < limit && t * FOLD_RATIO >= shortest {
-                    t
-                } else {
-                    f64::INFINITY
-                }
-            })
+            measure(distance, p, normals[v], shortest, limit, &far)
         })
         .collect()
+}
+
+/// The thickness of the solid behind the surface point `p` and the width of the gap in
+/// front of it (`normal`: the unit outward normal there), each when below `limit`, else
+/// infinity. On each side a ray along the normal looks for the other wall within
+/// `limit`; where it finds one on a triangle `far` from `p`, the thickness is the
+/// diameter of the largest ball touching the surface at `p` whose other contact lies
+/// across the part (shrinking-ball medial distance, started from the ray's chord), or
+/// the chord where no ball tells. A thickness below 1/[`FOLD_RATIO`] of `shortest` is
+/// a fold of the surface, not a part (infinity).
+fn measure(
+    distance: &SurfaceDistance,
+    p: [f64; 3],
+    normal: [f64; 3],
+    shortest: f64,
+    limit: f64,
+    far: &dyn Fn(u32) -> bool,
+) -> [f64; 2] {
+    [-1.0, 1.0].map(|direction| {
+        let d = scale(normal, direction);
+        // A ray that meets no other wall within the limit leaves room for a ball of
+        // the limit's diameter: not thin on this side.
+        let Some((hit, face)) = distance.ray_hit(p, d, limit) else {
+            return f64::INFINITY;
+        };
+        if !far(face) {
+            return f64::INFINITY;
+        }
+        // The ball's diameter is the thickness across a plate or a wire whatever the
+        // normal (the ray's chord is only a bound on it).
+        let ball = 2.0 * medial_radius(distance, p, d, 0.5 * hit, far);
+        let t = if ball.is_finite() { ball } else { hit };
+        if t < limit && t * FOLD_RATIO >= shortest {
+            t
+        } else {
+            f64::INFINITY
+        }
+    })
+}
+
+/// Unit vertex normals (area-weighted face normals summed; zero where they cancel).
+fn vertex_normals(surface: &SurfaceMesh) -> Vec<[f64; 3]> {
+    let mut normals = vec![[0.0; 3]; surface.num_vertices()];
+    for f in 0..surface.num_triangles() {
+        let n = surface.face_normal_scaled(f);
+        for &v in &surface.triangles[f] {
+            normals[v as usize] = add(normals[v as usize], n);
+        }
+    }
+    normals.iter().map(|&n| unit(n)).collect()
+}
+
+/// `n` scaled to length one, or zero when it has no direction.
+fn unit(n: [f64; 3]) -> [f64; 3] {
+    let l = norm(n);
+    if l > 0.0 && l.is_finite() {
+        scale(n, 1.0 / l)
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// The thickness sampled over the surface: its vertices, and points added on triangles
+/// where the vertices alone do not tell ([`sample_thickness`]). Triangles lie on the
+/// surface's triangles, the first points are its vertices.
+pub(super) struct ThicknessSamples {
+    /// The points: the surface's vertices, then the added ones.
+    pub positions: Vec<[f64; 3]>,
+    /// Unit outward normal at each point (the vertex normal; the face's on a face).
+    pub normals: Vec<[f64; 3]>,
+    /// `[solid, gap]` at each point, infinite where not thin.
+    pub thickness: Vec<[f64; 2]>,
+    /// Triangles over the points, covering the surface's triangles (pieces of one
+    /// surface triangle need not share their edges' points with the next one's).
+    pub triangles: Vec<[u32; 3]>,
+    /// Whether [`MAX_SAMPLES`] stopped the splitting (pieces left that asked for more).
+    pub bound: bool,
+}
+
+impl ThicknessSamples {
+    /// The thickness at the surface's vertices alone (`thickness`: from [`thickness`]),
+    /// over its triangles.
+    pub fn at_vertices(surface: &SurfaceMesh, thickness: &[[f64; 2]]) -> ThicknessSamples {
+        ThicknessSamples {
+            positions: surface.positions.clone(),
+            normals: vertex_normals(surface),
+            thickness: thickness.to_vec(),
+            triangles: surface.triangles.clone(),
+            bound: false,
+        }
+    }
+}
+
+/// Most points [`sample_thickness`] adds (about 10 µs each on one core): past it, the
+/// pieces left are sized by their corners, and the bound is reported.
+pub(super) const MAX_SAMPLES: usize = 2_000_000;
+
+/// Pieces whose longest edge is at most this fraction of the thickness limit (`2h`)
+/// are not split: the thickness is sampled every `h/8` at the finest. (The pipeline
+/// samples only where the vertices' sizing gave another topology: finely sampled,
+/// thin contacts between parts drawn with long triangles ask for fine cells over their
+/// whole area.)
+pub(super) const FINEST_SAMPLE: f64 = 1.0 / 16.0;
+
+/// Sample the thickness over the surface where its vertices do not tell it: a triangle
+/// (or piece) is split in four, and the thickness measured at its edges' midpoints,
+/// while its longest edge exceeds `limit` (a thin part may pass between vertices that
+/// far apart), or while on either side its corners disagree (thin at one and not at
+/// another, or thinner by more than √2) and its longest edge exceeds the thinnest
+/// corner's thickness (the change lies inside it at a scale the cells see), down to
+/// pieces of [`FINEST_SAMPLE`] `× limit`. A plate's thin rim drawn with long triangles
+/// reaching into the plate would otherwise ask for the rim's cells over those
+/// triangles' whole area. Triangles with a `skip` corner (crossings) are not split. A
+/// point added is a fold (not thin) where its thickness is below 1/[`FOLD_RATIO`] of
+/// the shortest edge at any corner of its triangle, as a vertex is against its own.
+/// At most [`MAX_SAMPLES`] points are added (`bound` says when that stopped it).
+pub(super) fn sample_thickness(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    vertex_thickness: &[[f64; 2]],
+    skip: &[bool],
+    limit: f64,
+) -> ThicknessSamples {
+    use rayon::prelude::*;
+    use rustc_hash::FxHashMap;
+    let mut shortest_edge = vec![f64::INFINITY; surface.num_vertices()];
+    for t in &surface.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            let l = norm(sub(surface.positions[a], surface.positions[b]));
+            shortest_edge[a] = shortest_edge[a].min(l);
+            shortest_edge[b] = shortest_edge[b].min(l);
+        }
+    }
+    let mut samples = ThicknessSamples {
+        positions: surface.positions.clone(),
+        normals: vertex_normals(surface),
+        thickness: vertex_thickness.to_vec(),
+        triangles: Vec::new(),
+        bound: false,
+    };
+    // Pieces still to decide: corners and the surface triangle they lie on.
+    let mut pieces: Vec<([u32; 3], u32)> = surface
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| !t.iter().any(|&v| skip[v as usize]))
+        .map(|(f, &t)| (t, f as u32))
+        .collect();
+    samples.triangles.extend(
+        surface
+            .triangles
+            .iter()
+            .filter(|t| t.iter().any(|&v| skip[v as usize])),
+    );
+    while !pieces.is_empty() {
+        let split: Vec<bool> = pieces
+            .par_iter()
+            .map(|&(t, _)| wants_split(&samples, t, limit))
+            .collect();
+        // Each split adds at most three points.
+        let added = 3 * split.iter().filter(|&&s| s).count();
+        if samples.positions.len() - surface.num_vertices() + added > MAX_SAMPLES {
+            samples.bound = true;
+            samples.triangles.extend(pieces.iter().map(|&(t, _)| t));
+            break;
+        }
+        // The midpoints, one per edge (shared by the pieces on both sides of it), in
+        // the pieces' order; then measured all at once.
+        let first_new = samples.positions.len();
+        let mut midpoint: FxHashMap<[u32; 2], u32> = FxHashMap::default();
+        // Per new point: its surface triangle.
+        let mut homes: Vec<u32> = Vec::new();
+        let mut next = Vec::new();
+        for (&(t, f), &s) in pieces.iter().zip(&split) {
+            if !s {
+                samples.triangles.push(t);
+                continue;
+            }
+            let mut m = [0u32; 3];
+            for (i, mi) in m.iter_mut().enumerate() {
+                let (a, b) = (t[i], t[(i + 1) % 3]);
+                let key = [a.min(b), a.max(b)];
+                *mi = *midpoint.entry(key).or_insert_with(|| {
+                    let id = samples.positions.len() as u32;
+                    let (pa, pb) = (samples.positions[a as usize], samples.positions[b as usize]);
+                    samples.positions.push(scale(add(pa, pb), 0.5));
+                    samples
+                        .normals
+                        .push(unit(surface.face_normal_scaled(f as usize)));
+                    homes.push(f);
+                    id
+                });
+            }
+            // Corners a, b, c with midpoints ab, bc, ca.
+            let [a, b, c] = t;
+            let [ab, bc, ca] = m;
+            next.extend([
+                ([a, ab, ca], f),
+                ([ab, b, bc], f),
+                ([ca, bc, c], f),
+                ([ab, bc, ca], f),
+            ]);
+        }
+        let measured: Vec<[f64; 2]> = (first_new..samples.positions.len())
+            .into_par_iter()
+            .map(|i| {
+                let home = surface.triangles[homes[i - first_new] as usize];
+                let shortest = home
+                    .iter()
+                    .map(|&v| shortest_edge[v as usize])
+                    .fold(f64::INFINITY, f64::min);
+                // A wall on a triangle sharing a corner with the home triangle is the
+                // surface turning there, not the other side of a part.
+                let far = |face: u32| {
+                    surface
+                        .triangles
+                        .get(face as usize)
+                        .is_some_and(|t| !t.iter().any(|v| home.contains(v)))
+                };
+                let (p, n) = (samples.positions[i], samples.normals[i]);
+                measure(distance, p, n, shortest, limit, &far)
+            })
+            .collect();
+        samples.thickness.extend(measured);
+        pieces = next;
+    }
+    samples
+}
+
+/// The longest edge of a triangle.
+fn longest_edge(p: [[f64; 3]; 3]) -> f64 {
+    (0..3)
+        .map(|k| norm(sub(p[k], p[(k + 1) % 3])))
+        .fold(0.0, f64::max)
+}
+
+/// Whether a piece needs the thickness at its edges' midpoints (see
+/// [`sample_thickness`]).
+fn wants_split(samples: &ThicknessSamples, t: [u32; 3], limit: f64) -> bool {
+    let longest = longest_edge(t.map(|v| samples.positions[v as usize]));
+    if longest.is_nan() || longest <= FINEST_SAMPLE * limit {
+        return false;
+    }
+    if longest > limit {
+        return true;
+    }
+    (0..2).any(|side| {
+        let th = t.map(|v| samples.thickness[v as usize][side]);
+        let thinnest = th.iter().copied().fold(f64::INFINITY, f64::min);
+        let thickest = th.iter().copied().fold(0.0, f64::max);
+        thinnest.is_finite() && thickest > thinnest * std::f64::consts::SQRT_2 && longest > thinnest
+    })
 }
 
 /// The radius of the largest ball (up to `r_max`) touching the surface at `q` with its
@@ -156,33 +380,22 @@ fn medial_radius(
 }
 
 /// Sizing features where the surface is thin, for each side (the solid behind it, the
-/// gap in front): over each triangle whose three corners are thin on that side (a
-/// plate, a wire, the walls of a slit), cells of 1/[`CELLS_ACROSS`] of its middle
-/// corner's thickness, so the part is resolved between its vertices too; at a thin
-/// vertex that no such triangle sizes as finely (on the rim of a thin region, alone, or
-/// thinner than its neighbours), a point with its own. Each faces its side and reaches
-/// half the thickness and one cell more: to the middle of the part or gap (the other
-/// wall's features reach the rest), and one cell out the other way. The octree's 2:1
-/// balance grades the cells around them.
-pub(super) fn thin_part_sizing(
-    surface: &SurfaceMesh,
-    thickness: &[[f64; 2]],
-) -> Vec<SizingFeature> {
-    let unit = |n: [f64; 3], sign: f64| {
-        let l = norm(n);
-        if l > 0.0 && l.is_finite() {
-            scale(n, sign / l)
-        } else {
-            [0.0; 3]
-        }
-    };
-    let mut normals = vec![[0.0; 3]; surface.num_vertices()];
-    for f in 0..surface.num_triangles() {
-        let n = surface.face_normal_scaled(f);
-        for &v in &surface.triangles[f] {
-            normals[v as usize] = add(normals[v as usize], n);
-        }
-    }
+/// gap in front), from the thickness sampled over it: over each sampled triangle whose
+/// three corners are thin on that side (a plate, a wire, the walls of a slit), cells of
+/// 1/[`CELLS_ACROSS`] of its middle corner's thickness, so the part is resolved between
+/// its points too; at a thin point that no such triangle sizes as finely (on the rim of
+/// a thin region, alone, or thinner than its neighbours), a point with its own. Each
+/// faces its side and reaches half the thickness and one cell more: to the middle of the
+/// part or gap (the other wall's features reach the rest), and one cell out the other
+/// way. The octree's 2:1 balance grades the cells around them.
+pub(super) fn thin_part_sizing(samples: &ThicknessSamples) -> Vec<SizingFeature> {
+    let ThicknessSamples {
+        positions,
+        normals,
+        thickness,
+        triangles,
+        ..
+    } = samples;
     let mut out = Vec::new();
     // Side 0 is the solid (against the outward normal), side 1 the gap.
     for (side, sign) in [(0, -1.0), (1, 1.0)] {
@@ -195,10 +408,10 @@ pub(super) fn thin_part_sizing(
                 toward,
             }
         };
-        // Per vertex: the coarsest thickness a triangle over it was sized for (infinite
+        // Per point: the coarsest thickness a triangle over it was sized for (infinite
         // when some triangle at it is not all thin).
         let mut covered_by = vec![0.0f64; thickness.len()];
-        for (f, tri) in surface.triangles.iter().enumerate() {
+        for tri in triangles {
             let mut t = tri.map(|v| thickness[v as usize][side]);
             let all_thin = t.iter().all(|x| x.is_finite());
             t.sort_unstable_by(f64::total_cmp);
@@ -208,23 +421,18 @@ pub(super) fn thin_part_sizing(
                 covered_by[v as usize] = covered_by[v as usize].max(sized);
             }
             if all_thin {
-                out.push(feature(
-                    tri.map(|v| surface.positions[v as usize]),
-                    t[1],
-                    t[2],
-                    unit(surface.face_normal_scaled(f), sign),
+                let corners = tri.map(|v| positions[v as usize]);
+                let normal = unit(crate::geom::cross(
+                    sub(corners[1], corners[0]),
+                    sub(corners[2], corners[0]),
                 ));
+                out.push(feature(corners, t[1], t[2], scale(normal, sign)));
             }
         }
         for (v, t) in thickness.iter().enumerate() {
             let t = t[side];
             if t.is_finite() && t * std::f64::consts::SQRT_2 < covered_by[v] {
-                out.push(feature(
-                    [surface.positions[v]; 3],
-                    t,
-                    t,
-                    unit(normals[v], sign),
-                ));
+                out.push(feature([positions[v]; 3], t, t, scale(normals[v], sign)));
             }
         }
     }
@@ -270,4 +478,109 @@ pub(super) fn sharp_features(surface: &SurfaceMesh, topology: &Topology) -> Shar
         }
     }
     features
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::closest_on_triangle;
+
+    /// A slab 40 × 40 × 1.5 with a flange 10 × 40 × 0.5 along one side (the L-shaped
+    /// profile (0,0) (50,0) (50,0.5) (40,0.5) (40,1.5) (0,1.5) in x–z, extruded 40
+    /// along y), drawn with as few triangles as it takes: the bottom is two triangles
+    /// from the slab's edge to the flange's, as a CAD export draws it.
+    fn stepped_plate() -> SurfaceMesh {
+        let profile = [
+            [0.0, 0.0],
+            [50.0, 0.0],
+            [50.0, 0.5],
+            [40.0, 0.5],
+            [40.0, 1.5],
+            [0.0, 1.5],
+        ];
+        let mut positions = Vec::new();
+        for y in [0.0, 40.0] {
+            positions.extend(profile.iter().map(|&[x, z]| [x, y, z]));
+        }
+        let mut triangles = Vec::new();
+        for i in 0..6u32 {
+            let j = (i + 1) % 6;
+            triangles.push([i, j, 6 + j]);
+            triangles.push([i, 6 + j, 6 + i]);
+        }
+        for k in 1..5u32 {
+            triangles.push([0, k + 1, k]);
+            triangles.push([6, 6 + k, 6 + k + 1]);
+        }
+        let mut mesh = SurfaceMesh::new(positions, triangles).unwrap();
+        if mesh.signed_volume() < 0.0 {
+            for t in &mut mesh.triangles {
+                t.swap(1, 2);
+            }
+        }
+        mesh
+    }
+
+    #[test]
+    fn a_flange_drawn_with_long_triangles_is_sized_over_the_flange_only() {
+        let plate = stepped_plate();
+        assert!((plate.signed_volume() - (40.0 * 40.0 * 1.5 + 10.0 * 40.0 * 0.5)).abs() < 1e-9);
+        let topology = Topology::new(&plate);
+        let distance = SurfaceDistance::new(&plate);
+        let skip = vec![false; plate.num_vertices()];
+        // Both the slab (1.5) and the flange (0.5) are thin below this limit.
+        let limit = 2.0;
+        let at_vertices = thickness(&plate, &topology, &distance, &skip, limit);
+        let samples = sample_thickness(&plate, &distance, &at_vertices, &skip, limit);
+        assert!(samples.positions.len() > plate.num_vertices() && !samples.bound);
+        // Every point measured on the flange's bottom or top, away from its edges,
+        // has the solid 0.5 thick behind it; on the slab's bottom, 1.5.
+        let (mut on_flange, mut on_slab) = (0, 0);
+        for (p, t) in samples.positions.iter().zip(&samples.thickness) {
+            let inner_y = p[1] > 0.5 && p[1] < 39.5;
+            let flat = p[2] == 0.0 || p[2] == 0.5;
+            if inner_y && flat && p[0] > 40.5 && p[0] < 49.5 {
+                assert!((t[0] - 0.5).abs() < 1e-6, "{p:?}: {t:?}");
+                on_flange += 1;
+            }
+            if inner_y && p[2] == 0.0 && p[0] > 0.5 && p[0] < 38.0 {
+                assert!((t[0] - 1.5).abs() < 1e-6, "{p:?}: {t:?}");
+                on_slab += 1;
+            }
+        }
+        assert!(on_flange > 20 && on_slab > 20, "{on_flange} {on_slab}");
+        {
+            let features = thin_part_sizing(&samples);
+            let flange = |f: &&SizingFeature| f.spacing * CELLS_ACROSS < 1.0;
+            // The flange's cells stay on the flange: no feature that fine reaches
+            // more than a sample's spacing (limit / 2) into the slab ...
+            for f in features.iter().filter(flange) {
+                for c in f.corners {
+                    assert!(c[0] >= 40.0 - 0.5 * limit, "{f:?}");
+                }
+                assert!(f.spacing * CELLS_ACROSS > 0.99 * 0.5, "{f:?}");
+            }
+            // ... and they cover the flange's bottom.
+            for i in 0..19 {
+                for j in 0..79 {
+                    let p = [40.5 + 0.5 * i as f64, 0.5 + 0.5 * j as f64, 0.0];
+                    let covered = features.iter().filter(flange).any(|f| {
+                        let [a, b, c] = f.corners;
+                        norm(sub(closest_on_triangle(p, a, b, c), p)) < 1e-9
+                    });
+                    assert!(covered, "{p:?} is not sized");
+                }
+            }
+        }
+        // Sized by its corners alone, a bottom triangle with two corners on the
+        // flange asks for the flange's cells over the slab too.
+        let corners_only = ThicknessSamples::at_vertices(&plate, &at_vertices);
+        let spread = thin_part_sizing(&corners_only)
+            .iter()
+            .filter(|f| f.spacing * CELLS_ACROSS < 1.0)
+            .flat_map(|f| f.corners)
+            .map(|c| c[0])
+            .fold(f64::INFINITY, f64::min);
+        assert!(spread < 1.0, "{spread}");
+    }
 }

@@ -326,3 +326,32 @@ fn a_tube_about_a_cell_thick_keeps_its_topology_among_the_interior_vertices() {
         .iter()
         .all(|s| s.cycles_ok && s.essential_cycles == 1));
 }
+
+#[test]
+fn a_tray_whose_thin_walls_its_vertices_miss_meshes_with_its_genus_on_both_sides() {
+    // tm_1002_tray_bottom.STL: a genus-23 tray drawn with long triangles. Sized by its
+    // vertices alone, neither side has the surface's topology (the inside falls apart
+    // into three pieces of genus 12, 10 and 5, thin walls lost between vertices);
+    // sized by the thickness sampled over its triangles, both do.
+    let dir = crate::common::realworld_dir();
+    if !dir.is_dir() {
+        println!("SKIPPED: no real-world folder at {}", dir.display());
+        return;
+    }
+    let surface = io::read_mesh(dir.join("tm_1002_tray_bottom.STL")).unwrap();
+    assert_eq!(necklace::MeshReport::new(&surface).genus, vec![Some(23)]);
+    for side in [Side::Inside, Side::Outside] {
+        let v = volume_mesh(&surface, side, &VolumeOptions::default()).unwrap();
+        assert_eq!(
+            v.topology.matches,
+            Some(true),
+            "{side:?}: {}",
+            v.topology.found
+        );
+        assert!(
+            v.thickness_samples > 0,
+            "{side:?}: sized by the vertices alone"
+        );
+        assert!(v.topology.rounds >= 2, "{side:?}");
+    }
+}
