@@ -346,10 +346,9 @@ struct SurfaceSizing {
     skip: Vec<bool>,
     /// The thickness limit (`THIN_FACTOR` × h).
     limit: f64,
-    /// The sizing by the thickness sampled over the triangles too, the number of
-    /// points added, and whether their bound stopped the sampling: made the first
+    /// The sizing by the thickness sampled over the triangles too: made the first
     /// time a side asks (its vertices' sizing gave another topology), then shared.
-    sampled: std::sync::OnceLock<(Vec<SizingFeature>, usize, bool)>,
+    sampled: std::sync::OnceLock<SampledSizing>,
     /// Creases, corners and the crossing curve to snap onto.
     features: SharpFeatures,
 }
@@ -618,24 +617,30 @@ fn size_surface(
     }
 }
 
+/// The sizing by the thickness sampled over the triangles ([`sample_thickness`]).
+#[derive(Debug, Clone)]
+struct SampledSizing {
+    /// Thin parts and gaps as sampled, and the crossing curve, as sizing features.
+    sizing: Vec<SizingFeature>,
+    /// Points added besides the vertices.
+    points: usize,
+    /// Whether [`MAX_SAMPLES`] stopped the sampling.
+    bound: bool,
+}
+
 impl SurfaceSizing {
-    /// The sizing by the thickness sampled over the triangles ([`sample_thickness`]),
-    /// with the crossing curve's; the points added, and whether their bound stopped it.
-    fn sampled(
-        &self,
-        surface: &SurfaceMesh,
-        distance: &SurfaceDistance,
-    ) -> &(Vec<SizingFeature>, usize, bool) {
+    /// The sizing by the thickness sampled over the triangles, made on the first call.
+    fn sampled(&self, surface: &SurfaceMesh, distance: &SurfaceDistance) -> &SampledSizing {
         self.sampled.get_or_init(|| {
             let samples =
                 sample_thickness(surface, distance, &self.thickness, &self.skip, self.limit);
             let mut sizing = thin_part_sizing(&samples);
             sizing.extend(&self.crossing_sizing);
-            (
+            SampledSizing {
                 sizing,
-                samples.positions.len() - surface.num_vertices(),
-                samples.bound,
-            )
+                points: samples.positions.len() - surface.num_vertices(),
+                bound: samples.bound,
+            }
         })
     }
 }
@@ -669,7 +674,7 @@ fn stuff_surface(
     // (refinements from earlier rounds), inside or in the shell.
     let stuff = |sampled: bool, extra: &[SizingFeature]| {
         let sizing = if sampled {
-            &surveyed.sampled(surface, distance).0
+            &surveyed.sampled(surface, distance).sizing
         } else {
             &surveyed.sizing
         };
@@ -687,13 +692,14 @@ fn stuff_surface(
     let (stuffed, found, rounds, sampled) =
         mesh_until_topology_matches(surface, &stuff, &mut spacing, expected, warnings)?;
     let samples = if sampled {
-        let (_, samples, bound) = *surveyed.sampled(surface, distance);
-        if bound {
+        let sampled = surveyed.sampled(surface, distance);
+        if sampled.bound {
             warnings.push(format!(
-                "the thickness sampled over the triangles stopped at {samples} points (the bound is {MAX_SAMPLES}): the triangles left are sized by their corners"
+                "the thickness sampled over the triangles stopped at {} points (the bound is {MAX_SAMPLES}): the triangles left are sized by their corners",
+                sampled.points
             ));
         }
-        samples
+        sampled.points
     } else {
         0
     };

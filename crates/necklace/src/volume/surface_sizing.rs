@@ -53,6 +53,7 @@ pub(super) fn thickness(
 ) -> Vec<[f64; 2]> {
     use rayon::prelude::*;
     let normals = vertex_normals(surface);
+    let shortest = shortest_edges(surface);
     (0..surface.num_vertices())
         .into_par_iter()
         .map(|v| {
@@ -61,14 +62,6 @@ pub(super) fn thickness(
                 return [f64::INFINITY; 2];
             }
             let p = surface.positions[v];
-            // The shortest edge at v: a wall much closer than it is a fold of the
-            // surface at v (a crease folded flat, a scanning defect), not a part.
-            let shortest = faces
-                .iter()
-                .flat_map(|&f| surface.triangles[f as usize])
-                .filter(|&u| u as usize != v)
-                .map(|u| norm(sub(surface.positions[u as usize], p)))
-                .fold(f64::INFINITY, f64::min);
             let v32 = v as u32;
             let far = |face: u32| {
                 surface
@@ -76,9 +69,25 @@ pub(super) fn thickness(
                     .get(face as usize)
                     .is_some_and(|t| !t.contains(&v32))
             };
-            measure(distance, p, normals[v], shortest, limit, &far)
+            measure(distance, p, normals[v], shortest[v], limit, &far)
         })
         .collect()
+}
+
+/// The shortest edge at each vertex (infinite at a vertex on no triangle): a wall much
+/// closer than it is a fold of the surface there (a crease folded flat, a scanning
+/// defect), not a part.
+fn shortest_edges(surface: &SurfaceMesh) -> Vec<f64> {
+    let mut shortest = vec![f64::INFINITY; surface.num_vertices()];
+    for t in &surface.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            let l = norm(sub(surface.positions[a], surface.positions[b]));
+            shortest[a] = shortest[a].min(l);
+            shortest[b] = shortest[b].min(l);
+        }
+    }
+    shortest
 }
 
 /// The thickness of the solid behind the surface point `p` and the width of the gap in
@@ -204,15 +213,7 @@ pub(super) fn sample_thickness(
 ) -> ThicknessSamples {
     use rayon::prelude::*;
     use rustc_hash::FxHashMap;
-    let mut shortest_edge = vec![f64::INFINITY; surface.num_vertices()];
-    for t in &surface.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
-            let l = norm(sub(surface.positions[a], surface.positions[b]));
-            shortest_edge[a] = shortest_edge[a].min(l);
-            shortest_edge[b] = shortest_edge[b].min(l);
-        }
-    }
+    let shortest_edge = shortest_edges(surface);
     let mut samples = ThicknessSamples {
         positions: surface.positions.clone(),
         normals: vertex_normals(surface),
