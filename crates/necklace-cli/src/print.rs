@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use necklace::error::printable;
-use necklace::morse::{MorseResult, StepSummary};
+use necklace::morse::{MorseResult, NormalSource, StepSummary};
 use necklace::pipeline::NeckReport;
 use necklace::shapes::ShapeKind;
 use necklace::volume::VolumeReport;
@@ -164,6 +164,15 @@ pub fn critical_text(
             s.hessian.eigenvalues[0], s.hessian.eigenvalues[1], s.hessian.eigenvalues[2]
         );
     }
+    let _ = writeln!(
+        out,
+        "{} completions (closers of essential cycles; `loops` cuts them only for classes of the genus the necks miss)",
+        result
+            .completions
+            .iter()
+            .filter(|c| c.normal_from == NormalSource::UpperLink)
+            .count()
+    );
     let _ = writeln!(out, "{} 2-saddles not selected:", result.rejected.len());
     for r in &result.rejected {
         let _ = writeln!(

@@ -9,7 +9,7 @@
 //! `(edge, t)` with the point `(1 − t)·a + t·b` for the edge's vertices `[a, b]` as stored
 //! by [`Topology`]; a vertex on the plane gives exactly `t = 0` or `t = 1`.
 //!
-//! Entry points: [`plane_cut`], [`loop_around`].
+//! Entry points: [`plane_cut`], [`loop_around`], [`encloses_another`].
 
 pub use crate::geom::plane_basis;
 use crate::geom::{dot, lerp, norm, sub};
@@ -192,6 +192,35 @@ fn area_and_contains(poly: &[[f64; 2]], point: [f64; 2]) -> (f64, bool) {
         }
     }
     (0.5 * area, inside)
+}
+
+/// Whether another closed curve of the plane lies inside closed curve `i`: then the
+/// region of the plane that curve `i` bounds is not a disk of one side of the surface
+/// (it has islands of the other), and the curve need not bound on that side.
+pub fn encloses_another(
+    mesh: &SurfaceMesh,
+    topology: &Topology,
+    plane: &Plane,
+    curves: &[CutCurve],
+    i: usize,
+) -> bool {
+    let (u, v) = plane_basis(plane.normal);
+    let project = |p: [f64; 3]| {
+        let d = sub(p, plane.origin);
+        [dot(d, u), dot(d, v)]
+    };
+    let poly: Vec<[f64; 2]> = curves[i]
+        .points(mesh, topology)
+        .into_iter()
+        .map(project)
+        .collect();
+    curves.iter().enumerate().any(|(j, c)| {
+        j != i
+            && c.closed
+            && c.points(mesh, topology)
+                .first()
+                .is_some_and(|&p| area_and_contains(&poly, project(p)).1)
+    })
 }
 
 /// Index of the closed curve around `point` (a point of the plane): among the closed

@@ -32,6 +32,13 @@
 //!    length.
 //! 4. [`lasso`]: each kept loop's best-fit circle and how far the loop strays from it.
 //!
+//! A seed may need a disk ([`Seed::disk_only`]: the Morse stage's completions, saddles
+//! not selected as necks): its plane's curve around it is kept only where no other
+//! curve of the plane lies inside it, so that the loop bounds a disk of the seed's side
+//! (a handle or tunnel loop whatever the saddle); only the plane through it is cut, no
+//! membrane, and its tightening may shrink it any amount. [`complete_classes`] adds
+//! such loops to a result where they add a class.
+//!
 //! Units are those of the surface. Every seed ends either as a loop or in `dropped` with
 //! a reason. Seeds are processed in parallel; the result does not depend on the thread
 //! count. Entry point: [`find_loops`].
@@ -48,7 +55,7 @@ mod transfer;
 
 pub use lasso::{fit_lasso, Lasso};
 pub use report::{DropReason, DroppedLoop, LoopResult, LoopTimings, NeckLoop, TighteningReport};
-pub use selection::{best_fit_normal, centroid};
+pub use selection::{best_fit_normal, centroid, complete_classes};
 use selection::{neck_loop, one_per_neck, select};
 pub use surface::LoopSurface;
 pub use transfer::transfer_loops;
@@ -65,7 +72,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, norm, scale};
 use crate::mesh::{HomologyBasis, Side, SurfaceMesh, Topology};
 use crate::progress::{Progress, Silent};
-use cut::{closed_length, loop_around, plane_basis, plane_cut, Plane};
+use cut::{closed_length, encloses_another, loop_around, plane_basis, plane_cut, Plane};
 use membrane::membrane_loop;
 pub use membrane::{MembraneFailure, MembraneOptions};
 use opening::Openings;
@@ -107,6 +114,15 @@ pub struct Seed {
     /// neck only if its loop opens out on both sides by [`LoopOptions::min_opening`]
     /// (module [`opening`]). Default false.
     pub needs_opening: bool,
+    /// Keep a plane's curve around the saddle only where no other curve of the plane
+    /// lies inside it: the region of the plane it bounds is then a disk of the seed's
+    /// side, so the loop bounds a disk there (a handle loop inside, a tunnel loop
+    /// outside) whatever the saddle. For a saddle the Morse stage did not select as a
+    /// neck (`MorseResult::completions`). Only the plane through the saddle is cut: a
+    /// parallel plane's point may lie on the other side of the surface, and a membrane's
+    /// loop is not checked. Default false.
+    #[serde(default)]
+    pub disk_only: bool,
 }
 
 /// Options of [`find_loops`].
@@ -512,7 +528,7 @@ fn loop_from_seed(
             })
         })
     };
-    if options.membranes == MembraneUse::Always {
+    if options.membranes == MembraneUse::Always && !seed.disk_only {
         return membrane().unwrap_or_else(|failure| {
             Err(DropReason::NoMembraneLoop {
                 failure,
@@ -524,18 +540,32 @@ fn loop_from_seed(
     }
     // The plane through the saddle first, then parallel ones nearest first.
     let step = options.offset_step * surface.bbox_diagonal();
-    let offsets = std::iter::once(0.0)
-        .chain((1..=options.plane_offsets).flat_map(|j| [j as f64 * step, -(j as f64) * step]));
-    let (mut closed, mut open) = (0, 0);
+    // A seed that needs a disk keeps to the plane through it (a parallel plane's point
+    // may lie on the other side of the surface, and its curve bound a disk there), and
+    // to planes (a membrane's loop is not checked for islands).
+    let tried = if seed.disk_only {
+        0
+    } else {
+        options.plane_offsets
+    };
+    let offsets =
+        std::iter::once(0.0).chain((1..=tried).flat_map(|j| [j as f64 * step, -(j as f64) * step]));
+    let (mut closed, mut open, mut not_disks) = (0, 0, 0);
     let mut failure = None;
     for offset in offsets {
         let point = add(seed.position, scale(n, offset));
-        let best = around_point(surface, topology, &normals, point);
+        let best = around_point(surface, topology, &normals, point, seed.disk_only);
         if offset == 0.0 {
             (closed, open) = (best.1, best.2);
         }
+        not_disks += best.3;
         if let Some((_, curve)) = best.0 {
-            let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
+            let t = tighten(
+                geometry,
+                &curve.crossings,
+                &curve.faces,
+                &tightening(seed, options),
+            );
             return tightened(t).map(|t| Start {
                 tightened: t,
                 offset,
@@ -543,7 +573,7 @@ fn loop_from_seed(
                 sources: Vec::new(),
             });
         }
-        if offset == 0.0 && options.membranes == MembraneUse::WherePlanesFail {
+        if offset == 0.0 && options.membranes == MembraneUse::WherePlanesFail && !seed.disk_only {
             match membrane() {
                 Ok(result) => return result,
                 Err(f) => failure = Some(f),
@@ -551,16 +581,20 @@ fn loop_from_seed(
         }
     }
     match failure {
+        None if not_disks > 0 => Err(DropReason::NoDiskAroundSaddle {
+            planes: not_disks,
+            offsets_tried: tried,
+        }),
         Some(failure) => Err(DropReason::NoMembraneLoop {
             failure,
             closed_curves: closed,
             open_curves: open,
-            offsets_tried: options.plane_offsets,
+            offsets_tried: tried,
         }),
         None => Err(DropReason::NoLoopAroundSaddle {
             closed_curves: closed,
             open_curves: open,
-            offsets_tried: options.plane_offsets,
+            offsets_tried: tried,
             offset_step: step,
         }),
     }
@@ -590,8 +624,13 @@ fn narrowest(
         .par_iter()
         .map(|&offset| {
             let point = add(seed.position, scale(n, offset));
-            let (_, curve) = around_point(surface, topology, &normals, point).0?;
-            let t = tighten(geometry, &curve.crossings, &curve.faces, &options.tighten);
+            let (_, curve) = around_point(surface, topology, &normals, point, seed.disk_only).0?;
+            let t = tighten(
+                geometry,
+                &curve.crossings,
+                &curve.faces,
+                &tightening(seed, options),
+            );
             tightened(t).ok()
         })
         .collect();
@@ -613,15 +652,18 @@ fn narrowest(
 }
 
 /// The shortest closed curve around `point` over the planes through it with these
-/// normals, and the closed and open curve counts of the first plane.
+/// normals, and the closed and open curve counts of the first plane. With
+/// `disk_only`, a curve with another one inside it is passed over ([`Seed::disk_only`]),
+/// and counted in the last number.
 fn around_point(
     surface: &SurfaceMesh,
     topology: &Topology,
     normals: &[[f64; 3]],
     point: [f64; 3],
-) -> (Option<(f64, cut::CutCurve)>, usize, usize) {
+    disk_only: bool,
+) -> (Option<(f64, cut::CutCurve)>, usize, usize, usize) {
     let mut best: Option<(f64, cut::CutCurve)> = None;
-    let (mut closed, mut open) = (0, 0);
+    let (mut closed, mut open, mut not_disks) = (0, 0, 0);
     for (j, &normal) in normals.iter().enumerate() {
         let plane = Plane {
             origin: point,
@@ -633,6 +675,10 @@ fn around_point(
             open = curves.len() - closed;
         }
         if let Some(i) = loop_around(surface, topology, &plane, &curves, point) {
+            if disk_only && encloses_another(surface, topology, &plane, &curves, i) {
+                not_disks += 1;
+                continue;
+            }
             let curve = curves.swap_remove(i);
             let length = closed_length(&curve.points(surface, topology));
             if best.as_ref().is_none_or(|(l, _)| length < *l) {
@@ -640,7 +686,21 @@ fn around_point(
             }
         }
     }
-    (best, closed, open)
+    (best, closed, open, not_disks)
+}
+
+/// The tightening options for a seed's loops: a seed that needs a disk
+/// ([`Seed::disk_only`]) may shrink to any length (its curve bounds a disk, so a loop
+/// that slides off a cap ends separating, and is dropped for that), the rest as given.
+fn tightening(seed: &Seed, options: &LoopOptions) -> TightenOptions {
+    if seed.disk_only {
+        TightenOptions {
+            min_length_ratio: f64::MIN_POSITIVE,
+            ..options.tighten
+        }
+    } else {
+        options.tighten
+    }
 }
 
 /// A tightened loop, or why it is dropped.

@@ -133,6 +133,14 @@ pub enum DropReason {
         /// Their spacing, in the surface's units.
         offset_step: f64,
     },
+    /// A seed that needs a disk ([`Seed::disk_only`](super::Seed::disk_only)): the
+    /// curves around it had other curves inside them, on every plane tried.
+    NoDiskAroundSaddle {
+        /// Planes whose curve around the saddle had another inside it.
+        planes: usize,
+        /// Parallel planes tried on each side.
+        offsets_tried: usize,
+    },
     /// The loop kept shrinking: it slid off a cap and is not a neck.
     Collapsed {
         /// Length of the plane-cut loop.
@@ -244,6 +252,13 @@ impl std::fmt::Display for DropReason {
             } => write!(
                 f,
                 "no loop around the saddle ({closed_curves} closed and {open_curves} open curves; {offsets_tried} parallel planes tried each side, {offset_step:.3e} apart)"
+            ),
+            DropReason::NoDiskAroundSaddle {
+                planes,
+                offsets_tried,
+            } => write!(
+                f,
+                "no plane's curve around it bounds a disk of its side ({planes} had curves inside them; {offsets_tried} parallel planes tried each side)"
             ),
             DropReason::Collapsed {
                 initial_length,

@@ -4,8 +4,8 @@
 //! ([`select`]). Every loop not kept is a [`DroppedLoop`] with its reason.
 
 use super::{
-    fit_lasso, membrane, Candidate, DropReason, DroppedLoop, LoopOptions, NeckLoop, Role, Seed,
-    TightenStatus, TighteningReport,
+    fit_lasso, membrane, Candidate, DropReason, DroppedLoop, LoopOptions, LoopResult, NeckLoop,
+    Role, Seed, TightenStatus, TighteningReport,
 };
 use crate::geom::{add, closest_on_segment, cross, dot, norm, scale, sub};
 use crate::mesh::{Side, SurfaceMesh, Z2Basis};
@@ -319,4 +319,80 @@ pub fn best_fit_normal(points: &[[f64; 3]], center: [f64; 3]) -> [f64; 3] {
     } else {
         normal
     }
+}
+
+/// Loops for the homology classes the selected saddles' loops miss: `extra` (found from
+/// the Morse stage's completions, seeds numbered from `offset` on in the run) is added
+/// to `found`, each loop only where its class is independent of every loop there and
+/// of those added before it, shortest first, after the loops of `found`. Every other
+/// loop of `extra` is dropped as the same cycle; its seeds and references are
+/// renumbered into the run's.
+pub fn complete_classes(found: &mut LoopResult, extra: LoopResult, offset: usize) {
+    let mut basis = Z2Basis::default();
+    for l in &found.loops {
+        basis.insert(&l.class());
+    }
+    let mut order: Vec<usize> = (0..extra.loops.len()).collect();
+    order.sort_by(|&a, &b| {
+        extra.loops[a]
+            .length
+            .total_cmp(&extra.loops[b].length)
+            .then(a.cmp(&b))
+    });
+    // Per loop of `extra`: its index in `found` once kept.
+    let mut placed = vec![None; extra.loops.len()];
+    let mut loops: Vec<Option<NeckLoop>> = extra.loops.into_iter().map(Some).collect();
+    for k in order {
+        let Some(mut l) = loops[k].take() else {
+            continue;
+        };
+        l.seed += offset;
+        l.duplicates.iter_mut().for_each(|d| *d += offset);
+        let class = l.class();
+        if !l.separating && basis.insert(&class) {
+            l.reason = format!(
+                "completes the genus: its saddle closes a class of it that no selected saddle's loop reaches, but has no 2-saddle Hessian at any level (cut normal from its upper link); {}",
+                l.reason
+            );
+            placed[k] = Some(found.loops.len());
+            found.loops.push(l);
+            continue;
+        }
+        let of = found.loops.iter().position(|kept| kept.class() == class);
+        let reason = if l.separating {
+            DropReason::NotEssential { length: l.length }
+        } else {
+            DropReason::SameCycle {
+                of: of.map(|j| found.loops[j].seed),
+                length: l.length,
+            }
+        };
+        // Its duplicates are in `extra.dropped`, renumbered below.
+        found.dropped.push(DroppedLoop {
+            kind: l.kind,
+            seed: l.seed,
+            saddle: l.saddle,
+            persistence: l.persistence,
+            reason,
+        });
+    }
+    for mut d in extra.dropped {
+        d.seed += offset;
+        d.reason = match d.reason {
+            DropReason::SameCycle { of, length } => DropReason::SameCycle {
+                of: of.map(|s| s + offset),
+                length,
+            },
+            DropReason::Duplicate { of, length } => match placed.get(of).copied().flatten() {
+                Some(kept) => DropReason::Duplicate { of: kept, length },
+                None => DropReason::SameCycle { of: None, length },
+            },
+            reason => reason,
+        };
+        found.dropped.push(d);
+    }
+    found.dropped.sort_by_key(|d| d.seed);
+    found.timings.preparation += extra.timings.preparation;
+    found.timings.cut_and_tighten += extra.timings.cut_and_tighten;
+    found.timings.selection += extra.timings.selection;
 }

@@ -19,8 +19,8 @@ use super::cut::Crossing;
 use super::membrane::{dual_path, shared_edge, without_backtracking};
 use super::tighten::tighten;
 use super::{
-    around_point, centroid, cutting_normals, membrane_loop, neck_loop, tightened, Initial,
-    LoopOptions, LoopResult, LoopSurface, Seed,
+    around_point, centroid, cutting_normals, membrane_loop, neck_loop, tightened, tightening,
+    Initial, LoopOptions, LoopResult, LoopSurface, Seed,
 };
 use super::{DropReason, DroppedLoop, NeckLoop};
 use crate::distance::SurfaceDistance;
@@ -130,7 +130,7 @@ pub fn transfer_loops(
                 let start = match (way, l.initial) {
                     (Way::Same, Initial::Plane) => {
                         let point = add(seed.position, scale(n, l.plane_offset));
-                        around_point(surface, &to.topology, &normals, point)
+                        around_point(surface, &to.topology, &normals, point, seed.disk_only)
                             .0
                             .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
                     }
@@ -147,7 +147,7 @@ pub fn transfer_loops(
                     (Way::Traced, _) => traced(surface, &to.topology, distance, &l.points, options)
                         .map(|(crossings, faces)| (crossings, faces, Vec::new())),
                     (Way::LoopPlane, _) => {
-                        around_point(surface, &to.topology, &[l.normal], l.center)
+                        around_point(surface, &to.topology, &[l.normal], l.center, seed.disk_only)
                             .0
                             .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
                     }
@@ -155,7 +155,7 @@ pub fn transfer_loops(
                 let Some((crossings, faces, sources)) = start else {
                     continue;
                 };
-                let t = tighten(&geometry, &crossings, &faces, &options.tighten);
+                let t = tighten(&geometry, &crossings, &faces, &tightening(seed, options));
                 status = Some(t.status);
                 let Ok(t) = tightened(t) else { continue };
                 if !same_neck(&t.points, t.length, l) {

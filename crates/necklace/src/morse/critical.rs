@@ -24,6 +24,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::geom::{add, norm, scale, sub};
 use crate::tet::{TetMesh, VertexKind};
 
 /// The type of a vertex.
@@ -283,6 +284,65 @@ impl Links {
         vertices.iter().enumerate().fold(0u64, |word, (i, &u)| {
             word | (u64::from(self.below(f, u as usize, v)) << i)
         })
+    }
+
+    /// The axis between two components of a vertex's upper link, those of its link
+    /// vertices `through`: the sum of the unit vectors from `v` to each vertex of a
+    /// component, the second's less the first's, made unit. Along it
+    /// the field rises on both sides: for a 2-saddle, the direction its Hessian's
+    /// positive eigenvector estimates, read from the link instead of a quadratic fit.
+    /// `None` when `v` is not interior, either is not an upper link vertex, both lie in
+    /// one component, or the two directions agree.
+    pub fn upper_axis(
+        &self,
+        v: usize,
+        f: &[f64],
+        positions: &[[f64; 3]],
+        through: [u32; 2],
+    ) -> Option<[f64; 3]> {
+        if self.kinds.get(v) != Some(&VertexKind::Interior) {
+            return None;
+        }
+        let vertices = &self.vertices[self.vertex_start[v]..self.vertex_start[v + 1]];
+        let edges = &self.edges[self.edge_start[v]..self.edge_start[v + 1]];
+        let upper: Vec<bool> = vertices
+            .iter()
+            .map(|&u| !self.below(f, u as usize, v))
+            .collect();
+        let mut parent: Vec<u16> = (0..vertices.len() as u16).collect();
+        for &[a, b] in edges {
+            if upper[usize::from(a)] && upper[usize::from(b)] {
+                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+                parent[usize::from(ra.max(rb))] = ra.min(rb);
+            }
+        }
+        let local = |u: u32| {
+            let i = vertices.binary_search(&u).ok()?;
+            upper[i].then_some(i as u16)
+        };
+        let (a, b) = (local(through[0])?, local(through[1])?);
+        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+        if ra == rb {
+            return None;
+        }
+        let centre = positions[v];
+        let direction = |parent: &mut [u16], r: u16| {
+            let mut sum = [0.0; 3];
+            for i in 0..vertices.len() {
+                if upper[i] && root(parent, i as u16) == r {
+                    let u = vertices[i] as usize;
+                    let d = sub(positions[u], centre);
+                    let length = norm(d);
+                    if length > 0.0 {
+                        sum = add(sum, scale(d, 1.0 / length));
+                    }
+                }
+            }
+            sum
+        };
+        let axis = sub(direction(&mut parent, rb), direction(&mut parent, ra));
+        let length = norm(axis);
+        (length > 0.0 && length.is_finite()).then(|| scale(axis, 1.0 / length))
     }
 
     fn classify_vertex(&self, v: usize, f: &[f64], s: &mut Scratch) -> VertexClass {

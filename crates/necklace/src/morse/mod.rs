@@ -48,6 +48,14 @@
 //!    Which candidates are the same neck at another scale (the same cycle, or the same
 //!    lobe in the same class) is decided on the surface, by the loops' homology
 //!    classes (`loops`).
+//!    Beside the selection, the scale space keeps its *completions*
+//!    ([`MorseResult::completions`]): at every level, the vertices that close the
+//!    essential cycles ([`Closer`]: a 2-saddle, or a degenerate saddle), followed from
+//!    level to level within the matching radius, each with the axis between the two
+//!    parts of its upper link the cycle closes through ([`Links::upper_axis`]) and its
+//!    Hessian's three eigenvectors as cutting normals. They are not necks by their
+//!    shape; the pipeline cuts them only for the classes of the genus that the
+//!    selected saddles' loops miss.
 //!
 //! Conventions: `L` is positive semidefinite (`l = −Δf`), `M` gives a quarter of each
 //! tet's volume to each of its vertices; lengths in the mesh's units; scales are `√t`;
@@ -81,9 +89,9 @@ pub use critical::{
 pub use hessian::{hessian_at, Hessian};
 pub use laplacian::{cotangent_stiffness, lumped_mass, SparseMatrix};
 pub use result::{
-    Bar, MorseResult, MorseTimings, RejectReason, RejectedSaddle, Saddle, StepSummary,
+    Bar, MorseResult, MorseTimings, NormalSource, RejectReason, RejectedSaddle, Saddle, StepSummary,
 };
-pub use roles::{RoleAt, Roles, SaddleRole, Sweep};
+pub use roles::{Closer, RoleAt, Roles, SaddleRole, Sweep};
 use selection::{barcode, select_at_last_step, select_over_scales};
 pub use smoothing::{implicit_step, HeatSolver, Preconditioner, SolverOptions, StepReport};
 pub use tracking::{CriticalPoint, StepEvents, Track, Tracker};
@@ -279,6 +287,22 @@ struct Observation {
     hessian: Option<Hessian>,
 }
 
+/// A vertex that closes an essential cycle at one level (a 2-saddle or a degenerate
+/// saddle, [`Closer`]), with the axis between the two components of its upper link the
+/// cycle closes through ([`Links::upper_axis`]) and its Hessian: what a completion is
+/// made from.
+#[derive(Debug, Clone, Copy)]
+struct Closing {
+    step: usize,
+    vertex: u32,
+    position: [f64; 3],
+    /// The matching radius there.
+    radius: f64,
+    value: f64,
+    axis: [f64; 3],
+    hessian: Option<Hessian>,
+}
+
 /// Smooth `field` on `mesh`, classify and track its critical points, and select the
 /// 2-saddles that mark necks (see the module doc).
 pub fn analyze(mesh: &TetMesh, field: &[f64], options: &MorseOptions) -> Result<MorseResult> {
@@ -342,6 +366,7 @@ pub fn analyze_with_progress(
     let mut steps = Vec::new();
     let mut tracker = Tracker::new();
     let mut observations: Vec<Vec<Observation>> = Vec::new();
+    let mut closings: Vec<Closing> = Vec::new();
     progress.start("smoothing and critical points", plan.len() as u64);
     let mut solved = plan.first().map(|p| solve(&mut solver, p.tau, &f));
     for (k, planned) in plan.iter().enumerate() {
@@ -373,6 +398,14 @@ pub fn analyze_with_progress(
                 &tracker,
                 &mut observations,
             );
+            record_closings(
+                (mesh, &links),
+                &level,
+                step,
+                &roles.closers,
+                options.track_radius,
+                &mut closings,
+            );
             steps.push(summarize(
                 step,
                 planned.scale,
@@ -396,10 +429,15 @@ pub fn analyze_with_progress(
     // 4. Select.
     let start = Instant::now();
     let scale_of = |step: usize| plan.get(step.wrapping_sub(1)).map(|p| p.scale);
-    let (saddles, rejected) = match options.schedule {
-        Schedule::ScaleSpace => {
-            select_over_scales(mesh, &tracker.tracks, &observations, options, &scale_of)
-        }
+    let selection = match options.schedule {
+        Schedule::ScaleSpace => select_over_scales(
+            mesh,
+            &tracker.tracks,
+            &observations,
+            (&closings, plan.len()),
+            options,
+            &scale_of,
+        ),
         Schedule::Paper => {
             let min_persistence = options
                 .min_persistence
@@ -415,7 +453,12 @@ pub fn analyze_with_progress(
             )
         }
     };
-    let bars = barcode(&tracker.tracks, &observations, &saddles, &scale_of);
+    let bars = barcode(
+        &tracker.tracks,
+        &observations,
+        &selection.saddles,
+        &scale_of,
+    );
     timings.selection += start.elapsed().as_secs_f64();
 
     Ok(MorseResult {
@@ -426,8 +469,9 @@ pub fn analyze_with_progress(
         solver: reports,
         multigrid: solver.multigrid().cloned(),
         steps,
-        saddles,
-        rejected,
+        saddles: selection.saddles,
+        rejected: selection.rejected,
+        completions: selection.completions,
         bars,
         tracks: tracker.tracks,
         field: f,
@@ -481,6 +525,34 @@ fn plan_steps(mesh: &TetMesh, options: &MorseOptions) -> Vec<PlannedStep> {
                 .collect()
         }
     }
+}
+
+/// Record every vertex of this level that closes an essential cycle, where its upper
+/// link gives an axis.
+fn record_closings(
+    (mesh, links): (&TetMesh, &Links),
+    f: &[f64],
+    step: usize,
+    closers: &[Closer],
+    track_radius: f64,
+    closings: &mut Vec<Closing>,
+) {
+    let found: Vec<Closing> = closers
+        .par_iter()
+        .filter_map(|c| {
+            let v = c.vertex as usize;
+            Some(Closing {
+                step,
+                vertex: c.vertex,
+                position: mesh.positions[v],
+                radius: track_radius * mean_edge_length(mesh, v),
+                value: f[v],
+                axis: links.upper_axis(v, f, &mesh.positions, c.through)?,
+                hessian: hessian_at(mesh, f, c.vertex),
+            })
+        })
+        .collect();
+    closings.extend(found);
 }
 
 /// Record every 2-saddle of this level with its track, role, lobe and Hessian.

@@ -97,10 +97,33 @@ pub struct Saddle {
     /// schedule) the cycle it closed was essential, never filled again (see
     /// [`roles`](super::roles)); false when every cycle it closed was noise or a second copy.
     pub essential: bool,
-    /// The fitted Hessian.
+    /// The fitted Hessian (for a completion, one that failed the 2-saddle test).
     pub hessian: Hessian,
-    /// Cutting-plane normal: the eigenvector of the positive eigenvalue.
+    /// Cutting-plane normal: the eigenvector of the positive eigenvalue, or for a
+    /// completion its upper link's axis (`normal_from`).
     pub normal: [f64; 3],
+    /// Where `normal` comes from.
+    #[serde(default)]
+    pub normal_from: NormalSource,
+}
+
+/// Where a saddle's cutting normal comes from.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalSource {
+    /// The fitted Hessian's positive eigenvector: a selected saddle.
+    #[default]
+    Hessian,
+    /// The axis between the two components of its upper link
+    /// ([`Links::upper_axis`](super::Links::upper_axis)): a completion, whose Hessian
+    /// has no 2-saddle signature at any level.
+    UpperLink,
+    /// An eigenvector of its Hessian (`index` in ascending eigenvalue order): a
+    /// completion cut in another direction.
+    Eigenvector {
+        /// Which eigenvector.
+        index: usize,
+    },
 }
 
 impl Saddle {
@@ -232,6 +255,15 @@ pub struct MorseResult {
     pub saddles: Vec<Saddle>,
     /// 2-saddle tracks that were not selected, and why (paper: those alive at `N`).
     pub rejected: Vec<RejectedSaddle>,
+    /// Scale space: the tracks rejected for their Hessian (listed in `rejected`) that
+    /// close an essential cycle of the genus at some level, as saddles with their
+    /// upper link's axis for normal, most persistent first; closer ones merged as in
+    /// the selection. Not necks by their shape (walls a lattice cell or two thick give
+    /// the quadratic fit no 2-saddle), but the cycle is one the surface has: the
+    /// pipeline cuts loops from them only when the selected saddles' loops miss some
+    /// of the genus's classes. Empty on the paper's schedule.
+    #[serde(default)]
+    pub completions: Vec<Saddle>,
     /// Every 2-saddle track of the run with its scale interval: the barcode.
     pub bars: Vec<Bar>,
     /// Every track of the run (those `alive` are the critical points at the last step).

@@ -92,6 +92,20 @@ pub struct Roles {
     /// Cycles closed in the sweep whose classes are independent: the dimension of
     /// H₁(X; Z2) when the sweep is consistent (every class is born at a saddle).
     pub essential_cycles: usize,
+    /// The vertex that closes each essential cycle, in sweep order: a 2-saddle, or a
+    /// degenerate saddle (whose upper link has three or more components).
+    pub closers: Vec<Closer>,
+}
+
+/// A vertex that closes an essential cycle, and the two upper neighbours through
+/// which it closes it (in two components of its upper link that are one component
+/// of the superlevel set above it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Closer {
+    /// The vertex.
+    pub vertex: u32,
+    /// The two upper neighbours.
+    pub through: [u32; 2],
 }
 
 /// Vertex adjacency of a mesh, built once; see the module doc.
@@ -161,7 +175,9 @@ impl Sweep {
         // The components above v, and v's path value into each (w words per root).
         let mut roots: Vec<u32> = Vec::new();
         let mut into: Vec<u64> = Vec::new();
-        let mut through: Vec<(u32, Vec<u64>)> = Vec::new();
+        // Per upper neighbour: its component's root, v's path value into it, itself.
+        let mut through: Vec<(u32, Vec<u64>, u32)> = Vec::new();
+        let mut closers = Vec::new();
         let mut value = vec![0u64; w];
         let mut root_into = vec![0u64; w];
         for &(_, v) in &interior {
@@ -182,11 +198,11 @@ impl Sweep {
                 through.clear();
                 for slot in upper {
                     let root = self.path_into(&mut forest, slot, &mut value);
-                    through.push((root, value.clone()));
+                    through.push((root, value.clone(), self.neighbours[slot]));
                 }
-                through.sort_by_key(|&(root, _)| root);
-                for (i, (root, path)) in through.iter().enumerate() {
-                    if through.iter().position(|(r, _)| r == root) == Some(i) {
+                through.sort_by_key(|&(root, _, _)| root);
+                for (i, (root, path, _)) in through.iter().enumerate() {
+                    if through.iter().position(|(r, _, _)| r == root) == Some(i) {
                         roots.push(*root);
                         into.extend_from_slice(path);
                     }
@@ -198,11 +214,11 @@ impl Sweep {
                 if w == 0 {
                     open = 0;
                 }
-                for (i, (root, path)) in through.iter().enumerate() {
+                for (i, (root, path, last)) in through.iter().enumerate() {
                     if open == 0 {
                         break;
                     }
-                    let first = through.iter().position(|(r, _)| r == root).unwrap_or(i);
+                    let first = through.iter().position(|(r, _, _)| r == root).unwrap_or(i);
                     if first == i || *path == through[first].1 {
                         continue;
                     }
@@ -215,6 +231,10 @@ impl Sweep {
                     if essential.insert(&self.cocycles.class(&mut sum)) {
                         new_cycles += 1;
                         open -= 1;
+                        closers.push(Closer {
+                            vertex: v,
+                            through: [through[first].2, *last],
+                        });
                     }
                 }
             } else if let Some(slot) = upper.next() {
@@ -276,6 +296,7 @@ impl Sweep {
         Roles {
             roles,
             essential_cycles: essential.rank(),
+            closers,
         }
     }
 

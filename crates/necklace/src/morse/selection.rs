@@ -5,20 +5,32 @@
 //! track's life.
 
 use super::{
-    hessian_at, mean_edge_length, newton_point, Bar, Hessian, MorseOptions, Observation,
-    RejectReason, RejectedSaddle, Saddle, SaddleRole, Track, VertexType,
+    hessian_at, mean_edge_length, newton_point, Bar, Closing, Hessian, MorseOptions, NormalSource,
+    Observation, RejectReason, RejectedSaddle, Saddle, SaddleRole, Track, VertexType,
 };
 use crate::geom::{norm, sub};
 use crate::tet::TetMesh;
+
+/// What a selection returns.
+pub(super) struct Selection {
+    /// The selected saddles.
+    pub saddles: Vec<Saddle>,
+    /// Every other 2-saddle track, and why.
+    pub rejected: Vec<RejectedSaddle>,
+    /// Scale space only: tracks rejected for their Hessian that close an essential
+    /// cycle (see [`MorseResult::completions`](super::MorseResult::completions)).
+    pub completions: Vec<Saddle>,
+}
 
 /// The scale-space selection (see the module doc).
 pub(super) fn select_over_scales(
     mesh: &TetMesh,
     tracks: &[Track],
     observations: &[Vec<Observation>],
+    (closings, levels): (&[Closing], usize),
     options: &MorseOptions,
     scale_of: &dyn Fn(usize) -> Option<f64>,
-) -> (Vec<Saddle>, Vec<RejectedSaddle>) {
+) -> Selection {
     let mut candidates = Vec::new();
     let mut rejected = Vec::new();
     for (t, track) in tracks.iter().enumerate() {
@@ -129,11 +141,98 @@ pub(super) fn select_over_scales(
             essential: fitted.iter().any(|(o, _)| o.role.essential),
             hessian: h,
             normal: h.normal(),
+            normal_from: NormalSource::Hessian,
         });
     }
     let (kept, duplicates) = merge_close(mesh, candidates, options.track_radius);
     rejected.extend(duplicates);
-    (kept, rejected)
+    Selection {
+        saddles: kept,
+        rejected,
+        completions: four_ways(completions(closings, levels, scale_of)),
+    }
+}
+
+/// The completions (see [`MorseResult::completions`](super::MorseResult::completions))
+/// from every level's closings of essential cycles: by level, least smoothed first, a
+/// closing within the matching radius of a completion's last position (and at a later
+/// level) follows it, like a track; otherwise it starts a new one. Each completion is
+/// placed at its first closing, with that closing's axis for normal; its persistence
+/// is the levels it was seen at, less one. Most persistent first, then by level and
+/// vertex.
+fn completions(
+    closings: &[Closing],
+    levels: usize,
+    scale_of: &dyn Fn(usize) -> Option<f64>,
+) -> Vec<Saddle> {
+    let mut order: Vec<&Closing> = closings.iter().collect();
+    order.sort_by_key(|c| (c.step, c.vertex));
+    // Per completion: its first closing, its last, and the levels it was seen at.
+    let mut found: Vec<(&Closing, &Closing, usize)> = Vec::new();
+    for c in order {
+        let follows = found.iter_mut().find(|(_, last, _)| {
+            last.step < c.step && norm(sub(last.position, c.position)) <= last.radius.max(c.radius)
+        });
+        match follows {
+            Some((_, last, seen)) => {
+                *last = c;
+                *seen += 1;
+            }
+            None => found.push((c, c, 1)),
+        }
+    }
+    let mut out: Vec<Saddle> = found
+        .into_iter()
+        .filter_map(|(first, last, seen)| {
+            let hessian = first.hessian.or(last.hessian)?;
+            Some(Saddle {
+                vertex: first.vertex,
+                position: first.position,
+                vertex_position: first.position,
+                value: first.value,
+                step: first.step,
+                scale: scale_of(first.step).unwrap_or(0.0),
+                born: first.step,
+                persistence: seen - 1,
+                birth_scale: scale_of(first.step).unwrap_or(0.0),
+                death_scale: if last.step >= levels {
+                    None
+                } else {
+                    scale_of(last.step + 1)
+                },
+                role: SaddleRole::CycleClosing,
+                bulge: None,
+                by_bulge: false,
+                lobe: None,
+                essential: true,
+                hessian,
+                normal: first.axis,
+                normal_from: NormalSource::UpperLink,
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| {
+        b.persistence
+            .cmp(&a.persistence)
+            .then(a.step.cmp(&b.step))
+            .then(a.vertex.cmp(&b.vertex))
+    });
+    out
+}
+
+/// Each completion cut four ways: along its upper link's axis, then along each of
+/// its Hessian's eigenvectors.
+fn four_ways(completions: Vec<Saddle>) -> Vec<Saddle> {
+    completions
+        .into_iter()
+        .flat_map(|c| {
+            std::iter::once(c).chain((0..3).map(move |k| Saddle {
+                normal: c.hessian.eigenvectors[k],
+                normal_from: NormalSource::Eigenvector { index: k },
+                ..c
+            }))
+        })
+        .collect()
 }
 
 /// The paper's selection: the 2-saddle tracks alive at the last step.
@@ -145,7 +244,7 @@ pub(super) fn select_at_last_step(
     min_persistence: usize,
     (track_radius, min_bulge): (f64, f64),
     scale_of: &dyn Fn(usize) -> Option<f64>,
-) -> (Vec<Saddle>, Vec<RejectedSaddle>) {
+) -> Selection {
     let mut saddles = Vec::new();
     let mut rejected = Vec::new();
     for (t, track) in tracks
@@ -196,12 +295,17 @@ pub(super) fn select_at_last_step(
                 essential: last.is_some_and(|o| o.role.essential),
                 hessian: h,
                 normal: h.normal(),
+                normal_from: NormalSource::Hessian,
             }),
         }
     }
     let (kept, duplicates) = merge_close(mesh, saddles, track_radius);
     rejected.extend(duplicates);
-    (kept, rejected)
+    Selection {
+        saddles: kept,
+        rejected,
+        completions: Vec::new(),
+    }
 }
 
 /// Saddles within the matching radius of a more persistent one (then one with a

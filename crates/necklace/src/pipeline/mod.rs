@@ -17,7 +17,12 @@
 //! 3. the exact distance field on its vertices ([`distance_field`]);
 //! 4. smoothing over scale, critical points and the neck 2-saddles (`morse`);
 //! 5. a loop per saddle (`loops`: plane cut, tightening, selection; on the volume
-//!    mesh's boundary where a neck lies by a self-crossing);
+//!    mesh's boundary where a neck lies by a self-crossing); where those loops span
+//!    fewer classes than the genus, loops from the Morse stage's completions (the
+//!    vertices that close essential cycles without passing as necks: walls a cell or
+//!    two thick give them no 2-saddle Hessian), each kept only where its plane bounds a
+//!    disk of its side and it adds a class (`loops::complete_classes`); where they span
+//!    more, the seeds cut again keeping only curves that bound disks (`Seed::disk_only`);
 //! 6. the Morse and homology checks, and the side into the [`NeckReport`] (its types
 //!    live in submodule `report`; pictures and point clouds of it are `output`'s);
 //! 7. the loops' surface points renumbered to the input's vertices.
@@ -41,9 +46,9 @@ use std::time::Instant;
 
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, Result};
-use crate::loops::{self, LoopOptions, LoopSurface, NeckLoop, Role, Seed};
+use crate::loops::{self, LoopOptions, LoopResult, LoopSurface, NeckLoop, Role, Seed};
 use crate::mesh::{Side, SurfaceMesh};
-use crate::morse::{self, MorseOptions, MorseResult, SaddleRole, Schedule};
+use crate::morse::{self, MorseOptions, MorseResult, Saddle, SaddleRole, Schedule};
 use crate::progress::{Lane, Progress, Silent};
 use crate::simplify::SimplifyOptions;
 use crate::tet::{TetMesh, VertexKind};
@@ -134,25 +139,44 @@ pub fn loop_seeds(result: &MorseResult) -> Vec<Seed> {
     result
         .saddles
         .iter()
+        .map(|s| seed_of(s, result.schedule))
+        .collect()
+}
+
+/// The seeds of the Morse stage's completions (`MorseResult::completions`: essential
+/// cycle-closing saddles without a 2-saddle Hessian), cut with their upper link's
+/// axis as normal.
+pub fn completion_seeds(result: &MorseResult) -> Vec<Seed> {
+    result
+        .completions
+        .iter()
         .map(|s| Seed {
-            position: s.position,
-            normal: s.normal,
-            persistence: s.persistence,
-            role: match s.role {
-                SaddleRole::Separating => Some(Role::Separating),
-                SaddleRole::CycleClosing => Some(Role::CycleClosing),
-                // Only the paper schedule selects these (it ignores roles).
-                SaddleRole::LocalCycle => None,
-            },
-            scales: (s.birth_scale, s.death_scale),
-            bulge: s.bulge,
-            lobe: s.lobe,
-            // The paper's schedule keeps what it selects, as the paper does.
-            needs_opening: result.schedule == Schedule::ScaleSpace
-                && s.role == SaddleRole::Separating
-                && !s.by_bulge,
+            disk_only: true,
+            ..seed_of(s, result.schedule)
         })
         .collect()
+}
+
+fn seed_of(s: &Saddle, schedule: Schedule) -> Seed {
+    Seed {
+        position: s.position,
+        normal: s.normal,
+        persistence: s.persistence,
+        role: match s.role {
+            SaddleRole::Separating => Some(Role::Separating),
+            SaddleRole::CycleClosing => Some(Role::CycleClosing),
+            // Only the paper schedule selects these (it ignores roles).
+            SaddleRole::LocalCycle => None,
+        },
+        scales: (s.birth_scale, s.death_scale),
+        bulge: s.bulge,
+        lobe: s.lobe,
+        // The paper's schedule keeps what it selects, as the paper does.
+        needs_opening: schedule == Schedule::ScaleSpace
+            && s.role == SaddleRole::Separating
+            && !s.by_bulge,
+        disk_only: false,
+    }
 }
 
 /// The whole method on a surface: [`prepare_input`], then for each side asked for,
@@ -349,37 +373,95 @@ fn find_side(
     // surface of the solid that was meshed.
     let seeds = loop_seeds(&result);
     let near = seeds_near(prepared, &seeds);
-    let found = if near > 0 {
-        let boundary = meshed_boundary(&volume.mesh, side);
+    let boundary = (near > 0).then(|| meshed_boundary(&volume.mesh, side));
+    if let Some(boundary) = &boundary {
         warnings.push(format!(
             "{name}: {near} of {} necks lie where the surface crosses itself, so this side's loops are cut and tightened on the volume mesh's boundary ({} triangles, the surface of the solid meshed) instead of the input",
             seeds.len(),
             boundary.num_triangles()
         ));
-        loops::find_loops_with_progress(&boundary, None, &seeds, side, &loop_options, progress)?
-    } else {
-        let distance = Some(&prepared.distance);
-        loops::find_loops_with_progress(surface, distance, &seeds, side, &loop_options, progress)?
-    };
-    // On a simplified copy: the same planes cut the input, and the loops are tightened
-    // there.
-    let found = match carry {
-        Some(c) => {
-            let input = &c.prepared;
-            let to = c.surface.get_or_init(|| LoopSurface::new(&input.mesh));
-            let distance = &input.distance;
-            loops::transfer_loops(&input.mesh, to, distance, &seeds, found, &loop_options)?
+    }
+    let cut_loops = |seeds: &[Seed]| -> Result<LoopResult> {
+        let found = match &boundary {
+            Some(boundary) => loops::find_loops_with_progress(
+                boundary,
+                None,
+                seeds,
+                side,
+                &loop_options,
+                progress,
+            )?,
+            None => loops::find_loops_with_progress(
+                surface,
+                Some(&prepared.distance),
+                seeds,
+                side,
+                &loop_options,
+                progress,
+            )?,
+        };
+        // On a simplified copy: the same planes cut the input, and the loops are
+        // tightened there.
+        match carry {
+            Some(c) => {
+                let input = &c.prepared;
+                let to = c.surface.get_or_init(|| LoopSurface::new(&input.mesh));
+                let distance = &input.distance;
+                loops::transfer_loops(&input.mesh, to, distance, seeds, found, &loop_options)
+            }
+            None => Ok(found),
         }
-        None => found,
     };
-
-    // 6. The Morse and homology checks.
-    let surface_report = &prepared.mesh_report;
-    let genus = surface_report
+    let genus = prepared
+        .mesh_report
         .component_details
         .iter()
         .map(|c| c.genus)
         .sum::<Option<i64>>();
+    let off_genus = |found: &LoopResult| genus.map(|g| loop_rank(&found.loops) as i64 - g);
+    let homology = loop_options.homology_selection;
+    // 5b. Classes of the genus that no selected saddle's loop reaches: loops from the
+    //     vertices that close them but fail as necks (walls a cell or two thick give
+    //     no 2-saddle Hessian), kept only where they add a class.
+    let completions = completion_seeds(&result);
+    let completed = |seeds: &[Seed]| -> Result<(LoopResult, bool)> {
+        let mut found = cut_loops(seeds)?;
+        let missing = off_genus(&found).is_some_and(|d| d < 0);
+        let complete = missing && homology && !completions.is_empty();
+        if complete {
+            let extra = cut_loops(&completions)?;
+            loops::complete_classes(&mut found, extra, seeds.len());
+        }
+        Ok((found, complete))
+    };
+    let (mut found, mut completed_with) = completed(&seeds)?;
+    // 5c. More classes than the genus: some loop bounds no disk on this side (its
+    //     plane's curve has another inside it: a cross-section with holes). Cut again
+    //     keeping only curves that bound disks (and complete that); taken when it is
+    //     nearer the genus.
+    if let Some(over) = off_genus(&found).filter(|&d| d > 0 && homology) {
+        let strict: Vec<Seed> = seeds
+            .iter()
+            .map(|s| Seed {
+                disk_only: true,
+                ..*s
+            })
+            .collect();
+        let (again, with) = completed(&strict)?;
+        if let Some(d) = off_genus(&again).filter(|d| d.abs() < over) {
+            warnings.push(format!(
+                "{name}: the loops spanned {over} classes more than the genus; cut again keeping only plane curves that bound a disk on this side (now {d:+})"
+            ));
+            (found, completed_with) = (again, with);
+        }
+    }
+    let mut saddles = result.saddles.clone();
+    if completed_with {
+        saddles.extend(result.completions.iter().copied());
+    }
+
+    // 6. The Morse and homology checks.
+    let surface_report = &prepared.mesh_report;
     // The swept complex should have the surface's genus as its H1 rank, and the sweep
     // should find every one of its classes at every level.
     let cycle_rank = result.cycle_rank as i64;
@@ -407,8 +489,7 @@ fn find_side(
         cycle_rank: result.cycle_rank,
         steps: result.steps.clone(),
     };
-    let classes: Vec<Vec<u64>> = found.loops.iter().map(NeckLoop::class).collect();
-    let rank = crate::mesh::z2_rank(&classes);
+    let rank = loop_rank(&found.loops);
     if let Some(g) = genus.filter(|&g| g != rank as i64) {
         warnings.push(format!(
             "{name}: the {} loops have Z2 rank {rank}, the surface has genus {g}",
@@ -440,7 +521,7 @@ fn find_side(
         volume: volume.report(),
         unknowns: result.unknowns,
         critical: tracked_points(&result),
-        saddles: result.saddles,
+        saddles,
         rejected: result.rejected,
         timings,
         field: options.keep_volume.then_some(VolumeField {
@@ -455,6 +536,12 @@ fn find_side(
         dropped: found.dropped,
         warnings,
     }))
+}
+
+/// The Z2 rank of the loops' homology classes.
+fn loop_rank(loops: &[NeckLoop]) -> usize {
+    let classes: Vec<Vec<u64>> = loops.iter().map(NeckLoop::class).collect();
+    crate::mesh::z2_rank(&classes)
 }
 
 /// A wall clock read in laps: each lap is the time since the one before, so the laps

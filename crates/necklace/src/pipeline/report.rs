@@ -103,7 +103,9 @@ pub struct SideReport {
     pub volume: VolumeReport,
     /// Interior vertices (unknowns of the heat system).
     pub unknowns: usize,
-    /// The selected 2-saddles (the loops' seeds, in this order).
+    /// The selected 2-saddles (the loops' seeds, in this order), then, when their loops
+    /// missed classes of the genus, the Morse stage's completions that were cut for
+    /// them (`normal_from` other than the Hessian).
     pub saddles: Vec<morse::Saddle>,
     /// 2-saddles not selected, with reasons.
     pub rejected: Vec<morse::RejectedSaddle>,

@@ -10,6 +10,7 @@ use necklace::loops::{
     SurfacePoint, TightenOptions, Tightened,
 };
 use necklace::mesh::Topology;
+use necklace::morse::NormalSource;
 use necklace::pipeline::{find_necks, NeckOptions, NeckReport};
 use necklace::shapes::{Shape, ShapeKind};
 use necklace::Side;
@@ -1188,4 +1189,89 @@ fn both_sides_at_once_give_the_report_of_one_side_after_the_other() {
     let (at_once, one_by_one) = (run(true), run(false));
     assert_eq!(at_once.0, 2);
     assert_eq!(at_once.1, one_by_one.1);
+}
+
+#[test]
+fn a_seed_that_needs_a_disk_keeps_a_curve_only_where_no_other_lies_inside_it() {
+    // A torus (R = 1, r = 0.3) cut by its equatorial plane: two concentric circles.
+    // From a point in the tube, the curve around it is the outer circle, which has
+    // the inner one inside it: the plane's region it bounds is an annulus of the solid,
+    // not a disk, and the loop (the sum of the tunnel and the rim) bounds nothing
+    // inside. The plane through the axis cuts two separate meridians: disks.
+    let torus = Shape::new(ShapeKind::Torus).mesh().unwrap();
+    let in_tube = |normal| Seed {
+        position: [1.0, 0.0, 0.0],
+        normal,
+        persistence: 5,
+        role: Some(necklace::loops::Role::CycleClosing),
+        disk_only: true,
+        ..Seed::default()
+    };
+    let seeds = [in_tube([0.0, 0.0, 1.0]), in_tube([0.0, 1.0, 0.0])];
+    let r = find_loops(&torus, &seeds, Side::Inside, &LoopOptions::default()).unwrap();
+    assert_eq!(r.loops.len(), 1, "{:?}", r.dropped);
+    assert_eq!(r.loops[0].seed, 1);
+    let tube = 2.0 * PI * 0.3;
+    assert!((r.loops[0].length - tube).abs() < 0.01 * tube);
+    assert!(matches!(
+        r.dropped[0].reason,
+        DropReason::NoDiskAroundSaddle { planes: 1, .. }
+    ));
+    // Without the check the same equatorial seed gives a loop.
+    let free = Seed {
+        disk_only: false,
+        ..seeds[0]
+    };
+    let r = find_loops(&torus, &[free], Side::Inside, &LoopOptions::default()).unwrap();
+    assert_eq!(r.loops.len(), 1, "{:?}", r.dropped);
+}
+
+#[test]
+fn where_the_selection_keeps_no_saddle_the_completions_find_every_handle_and_tunnel() {
+    // No track lives 1000 levels, so the Morse stage selects nothing; the vertices
+    // that close the essential cycles at each level (the completions), cut across
+    // their upper links' axes, still give the torus' and the pretzel's loops: the
+    // tube's meridian 2πr inside and the hole's rim 2π(R − r) outside, of full rank.
+    for shape in [
+        Shape::new(ShapeKind::Torus),
+        Shape::new(ShapeKind::Pretzel).with("g", 2.0).unwrap(),
+    ] {
+        let mesh = shape.mesh().unwrap();
+        let mut options = NeckOptions::default();
+        options.morse.min_levels = 1000;
+        let r = find_necks(&mesh, &options).unwrap();
+        let topology = Topology::new(&mesh);
+        let genus = shape.genus();
+        for side in &r.sides {
+            assert_eq!(
+                side.homology.rank,
+                genus,
+                "{}: {:?}",
+                shape.kind(),
+                r.dropped
+            );
+        }
+        assert_eq!(r.loops.len(), 2 * genus, "{:?}", r.dropped);
+        let (big, small) = (shape.param("R"), shape.param("r"));
+        for l in &r.loops {
+            check_loop(&mesh, &topology, l);
+            assert!(l.reason.starts_with("completes the genus"), "{}", l.reason);
+            // Its seed is one of its side's completions (none was selected).
+            let side = r.sides.iter().find(|s| s.side == l.kind).unwrap();
+            let saddle = side.saddles[l.seed];
+            assert_ne!(saddle.normal_from, NormalSource::Hessian);
+            assert_eq!(saddle.position, l.saddle);
+            let expected = match l.kind {
+                Side::Inside => 2.0 * PI * small,
+                Side::Outside => 2.0 * PI * (big - small),
+            };
+            assert!(
+                (l.length - expected).abs() < 0.01 * expected,
+                "{}: {:?} {} vs {expected}",
+                shape.kind(),
+                l.kind,
+                l.length
+            );
+        }
+    }
 }

@@ -4,8 +4,8 @@
 
 use crate::common::Inside;
 use necklace::morse::{
-    analyze, classify, hessian_at, CriticalPoint, MorseOptions, MorseResult, RejectReason,
-    SaddleRole, Schedule, Tracker, VertexType,
+    analyze, classify, hessian_at, CriticalPoint, MorseOptions, MorseResult, NormalSource,
+    RejectReason, SaddleRole, Schedule, Tracker, VertexType,
 };
 use necklace::pipeline::{critical_points, surface_morse_expected};
 use necklace::shapes::{Shape, ShapeKind};
@@ -597,4 +597,34 @@ fn around_a_trefoil_knot_one_cycle_is_essential_and_the_others_are_filled() {
         assert_eq!(s.essential_cycles, 1, "{s:?}");
     }
     assert!(r.steps.iter().any(|s| s.cycle_closing > 1));
+}
+
+#[test]
+fn a_varying_torus_completion_is_cut_across_its_thinnest_part_from_its_upper_link() {
+    // The tube's radius is r0 (1 + a cos θ): thinnest at θ = π, x = −R. Every level
+    // closes the one essential cycle there, at a vertex whose upper link lies in two
+    // parts along the core circle: the axis between them is the core's tangent (y), so
+    // a plane normal to it cuts the narrowest meridian, whatever the Hessian says.
+    let shape = Shape::new(ShapeKind::VaryingTorus);
+    let r = run_with(&shape, Side::Inside, &MorseOptions::default());
+    let axes: Vec<_> = r
+        .completions
+        .iter()
+        .filter(|c| c.normal_from == NormalSource::UpperLink)
+        .collect();
+    assert!(!axes.is_empty());
+    // Four seeds per completion: its axis, then its Hessian's three eigenvectors.
+    assert_eq!(r.completions.len(), 4 * axes.len());
+    for (k, c) in r.completions.chunks(4).enumerate() {
+        assert_eq!(c[0].normal_from, NormalSource::UpperLink);
+        for (j, e) in c[1..].iter().enumerate() {
+            assert_eq!(e.normal_from, NormalSource::Eigenvector { index: j }, "{k}");
+            assert_eq!(e.normal, c[0].hessian.eigenvectors[j]);
+        }
+    }
+    let most = axes[0];
+    assert!(most.essential && most.role == SaddleRole::CycleClosing);
+    assert!(most.persistence + 1 >= r.steps.len() / 2, "{most:?}");
+    assert!(distance(most.position, [-1.0, 0.0, 0.0]) < 0.1, "{most:?}");
+    assert!(angle_deg(most.normal, [0.0, 1.0, 0.0]) < 20.0, "{most:?}");
 }
