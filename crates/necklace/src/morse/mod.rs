@@ -51,9 +51,12 @@
 //!    Beside the selection, the scale space keeps its *completions*
 //!    ([`MorseResult::completions`]): at every level, the vertices that close the
 //!    essential cycles ([`Closer`]: a 2-saddle, or a degenerate saddle), followed from
-//!    level to level within the matching radius, each with the axis between the two
-//!    parts of its upper link the cycle closes through ([`Links::upper_axis`]) and its
-//!    Hessian's three eigenvectors as cutting normals. They are not necks by their
+//!    level to level within the matching radius, each with up to five cutting normals:
+//!    the axis between the two parts of its upper link the cycle closes through
+//!    ([`Links::upper_axis`]); the normal of the plane through it that holds the
+//!    centroid and best-fit normal of the cycle itself (the shortest way round in the
+//!    superlevel set, [`Sweep::cycle_through`], searched once per completion); and its
+//!    Hessian's three eigenvectors. They are not necks by their
 //!    shape; the pipeline cuts them only for the classes of the genus that the
 //!    selected saddles' loops miss.
 //!
@@ -78,7 +81,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::geom::{add, dot, norm, scale, sub};
+use crate::geom::{add, cross, dot, least_squares_normal, norm, scale, sub};
 use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 
@@ -301,7 +304,23 @@ struct Closing {
     value: f64,
     axis: [f64; 3],
     hessian: Option<Hessian>,
+    /// For the first closing of a completion: the normal of the plane through the
+    /// vertex that holds the cycle's centre and its best-fit plane's normal
+    /// ([`cycle_normal`]).
+    cycle_normal: Option<[f64; 3]>,
 }
+
+/// A completion followed over levels: its first closing, its last, and the levels it
+/// was seen at.
+#[derive(Debug, Clone, Copy)]
+struct Followed {
+    first: Closing,
+    last: Closing,
+    seen: usize,
+}
+
+/// Vertices a search for a closed cycle may visit ([`Sweep::cycle_through`]).
+const CYCLE_SEARCH_LIMIT: usize = 500_000;
 
 /// Smooth `field` on `mesh`, classify and track its critical points, and select the
 /// 2-saddles that mark necks (see the module doc).
@@ -366,7 +385,7 @@ pub fn analyze_with_progress(
     let mut steps = Vec::new();
     let mut tracker = Tracker::new();
     let mut observations: Vec<Vec<Observation>> = Vec::new();
-    let mut closings: Vec<Closing> = Vec::new();
+    let mut followed: Vec<Followed> = Vec::new();
     progress.start("smoothing and critical points", plan.len() as u64);
     let mut solved = plan.first().map(|p| solve(&mut solver, p.tau, &f));
     for (k, planned) in plan.iter().enumerate() {
@@ -399,12 +418,12 @@ pub fn analyze_with_progress(
                 &mut observations,
             );
             record_closings(
-                (mesh, &links),
+                (mesh, &links, &sweep),
                 &level,
                 step,
                 &roles.closers,
                 options.track_radius,
-                &mut closings,
+                &mut followed,
             );
             steps.push(summarize(
                 step,
@@ -434,7 +453,7 @@ pub fn analyze_with_progress(
             mesh,
             &tracker.tracks,
             &observations,
-            (&closings, plan.len()),
+            (&followed, plan.len()),
             options,
             &scale_of,
         ),
@@ -530,18 +549,18 @@ fn plan_steps(mesh: &TetMesh, options: &MorseOptions) -> Vec<PlannedStep> {
 /// Record every vertex of this level that closes an essential cycle, where its upper
 /// link gives an axis.
 fn record_closings(
-    (mesh, links): (&TetMesh, &Links),
+    (mesh, links, sweep): (&TetMesh, &Links, &Sweep),
     f: &[f64],
     step: usize,
     closers: &[Closer],
     track_radius: f64,
-    closings: &mut Vec<Closing>,
+    followed: &mut Vec<Followed>,
 ) {
-    let found: Vec<Closing> = closers
+    let mut found: Vec<(Closing, Closer)> = closers
         .par_iter()
         .filter_map(|c| {
             let v = c.vertex as usize;
-            Some(Closing {
+            let closing = Closing {
                 step,
                 vertex: c.vertex,
                 position: mesh.positions[v],
@@ -549,10 +568,61 @@ fn record_closings(
                 value: f[v],
                 axis: links.upper_axis(v, f, &mesh.positions, c.through)?,
                 hessian: hessian_at(mesh, f, c.vertex),
-            })
+                cycle_normal: None,
+            };
+            Some((closing, *c))
         })
         .collect();
-    closings.extend(found);
+    found.sort_by_key(|(c, _)| c.vertex);
+    // A closing within the matching radius of a completion's last one (seen at an
+    // earlier level) follows it, like a track; the others start completions.
+    let mut fresh = Vec::new();
+    for (c, closer) in found {
+        let follows = followed.iter_mut().find(|f| {
+            f.last.step < c.step
+                && norm(sub(f.last.position, c.position)) <= f.last.radius.max(c.radius)
+        });
+        match follows {
+            Some(f) => {
+                f.last = c;
+                f.seen += 1;
+            }
+            None => fresh.push((c, closer)),
+        }
+    }
+    let fresh: Vec<Followed> = fresh
+        .into_par_iter()
+        .map(|(mut c, closer)| {
+            c.cycle_normal = sweep
+                .cycle_through(closer, f, CYCLE_SEARCH_LIMIT)
+                .and_then(|path| cycle_normal(&mesh.positions, &path));
+            Followed {
+                first: c,
+                last: c,
+                seen: 1,
+            }
+        })
+        .collect();
+    followed.extend(fresh);
+}
+
+/// The normal of the plane through a cycle's first vertex that holds the cycle's
+/// centroid and the normal of its best-fit plane: for a cycle round a hole, the plane
+/// through the vertex and the hole's axis, which cuts the bar the vertex lies in
+/// (the cycle's tangent there, had it been a circle). `None` when the vertex is at the
+/// centroid or the cycle is straight.
+fn cycle_normal(positions: &[[f64; 3]], path: &[u32]) -> Option<[f64; 3]> {
+    let points: Vec<[f64; 3]> = path.iter().map(|&u| positions[u as usize]).collect();
+    let centroid = scale(
+        points.iter().fold([0.0; 3], |s, &p| add(s, p)),
+        1.0 / points.len() as f64,
+    );
+    let normal = cross(
+        least_squares_normal(&points, centroid),
+        sub(points[0], centroid),
+    );
+    let length = norm(normal);
+    (length > 0.0 && length.is_finite()).then(|| scale(normal, 1.0 / length))
 }
 
 /// Record every 2-saddle of this level with its track, role, lobe and Hessian.

@@ -118,6 +118,10 @@ pub enum NormalSource {
     /// ([`Links::upper_axis`](super::Links::upper_axis)): a completion, whose Hessian
     /// has no 2-saddle signature at any level.
     UpperLink,
+    /// The plane through it that holds its cycle's centroid and best-fit normal (the
+    /// cycle it closes, found in the superlevel set): a completion cut across the bar
+    /// it lies in, round the hole its cycle goes round.
+    Cycle,
     /// An eigenvector of its Hessian (`index` in ascending eigenvalue order): a
     /// completion cut in another direction.
     Eigenvector {

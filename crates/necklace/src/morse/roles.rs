@@ -133,6 +133,53 @@ impl Sweep {
         }
     }
 
+    /// The cycle that `closer` closes, as a path of vertices: `closer.vertex`, then the
+    /// fewest edges from one of its upper neighbours to the other through vertices above
+    /// it (the superlevel set it closes a cycle of: outer-sphere vertices, and interior
+    /// ones above in `(f, index)`). `None` when no such path is found within `limit`
+    /// vertices visited. Breadth first, neighbours in index order: the same path on
+    /// every run.
+    pub fn cycle_through(&self, closer: Closer, f: &[f64], limit: usize) -> Option<Vec<u32>> {
+        let v = closer.vertex;
+        let is_above = |u: u32| match self.kinds[u as usize] {
+            VertexKind::Outer => true,
+            VertexKind::Surface => false,
+            VertexKind::Interior => f[u as usize]
+                .total_cmp(&f[v as usize])
+                .then(u.cmp(&v))
+                .is_gt(),
+        };
+        let [from, to] = closer.through;
+        if !is_above(from) || !is_above(to) {
+            return None;
+        }
+        let mut parent: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
+        parent.insert(from, from);
+        let mut queue = std::collections::VecDeque::from([from]);
+        while let Some(u) = queue.pop_front() {
+            if u == to {
+                let mut path = vec![v, to];
+                let mut x = to;
+                while x != from {
+                    x = parent[&x];
+                    path.push(x);
+                }
+                return Some(path);
+            }
+            if parent.len() > limit {
+                return None;
+            }
+            let u = u as usize;
+            for &w in &self.neighbours[self.start[u]..self.start[u + 1]] {
+                if w != v && is_above(w) && !parent.contains_key(&w) {
+                    parent.insert(w, u as u32);
+                    queue.push_back(w);
+                }
+            }
+        }
+        None
+    }
+
     /// The dimension of H₁(X; Z2) of the swept complex (see [`cycles`](super::cycles)):
     /// the genus, when the volume mesh kept the surface's topology.
     pub fn cycle_rank(&self) -> usize {

@@ -5,7 +5,7 @@
 //! track's life.
 
 use super::{
-    hessian_at, mean_edge_length, newton_point, Bar, Closing, Hessian, MorseOptions, NormalSource,
+    hessian_at, mean_edge_length, newton_point, Bar, Followed, Hessian, MorseOptions, NormalSource,
     Observation, RejectReason, RejectedSaddle, Saddle, SaddleRole, Track, VertexType,
 };
 use crate::geom::{norm, sub};
@@ -27,7 +27,7 @@ pub(super) fn select_over_scales(
     mesh: &TetMesh,
     tracks: &[Track],
     observations: &[Vec<Observation>],
-    (closings, levels): (&[Closing], usize),
+    (followed, levels): (&[Followed], usize),
     options: &MorseOptions,
     scale_of: &dyn Fn(usize) -> Option<f64>,
 ) -> Selection {
@@ -149,43 +149,25 @@ pub(super) fn select_over_scales(
     Selection {
         saddles: kept,
         rejected,
-        completions: four_ways(completions(closings, levels, scale_of)),
+        completions: cut_ways(completions(followed, levels, scale_of)),
     }
 }
 
 /// The completions (see [`MorseResult::completions`](super::MorseResult::completions))
-/// from every level's closings of essential cycles: by level, least smoothed first, a
-/// closing within the matching radius of a completion's last position (and at a later
-/// level) follows it, like a track; otherwise it starts a new one. Each completion is
-/// placed at its first closing, with that closing's axis for normal; its persistence
-/// is the levels it was seen at, less one. Most persistent first, then by level and
-/// vertex.
+/// from the closings of essential cycles followed over the levels (`record_closings`):
+/// each placed at its first closing, with that closing's upper-link axis for normal;
+/// its persistence is the levels it was seen at, less one. Most persistent first, then
+/// by level and vertex.
 fn completions(
-    closings: &[Closing],
+    followed: &[Followed],
     levels: usize,
     scale_of: &dyn Fn(usize) -> Option<f64>,
-) -> Vec<Saddle> {
-    let mut order: Vec<&Closing> = closings.iter().collect();
-    order.sort_by_key(|c| (c.step, c.vertex));
-    // Per completion: its first closing, its last, and the levels it was seen at.
-    let mut found: Vec<(&Closing, &Closing, usize)> = Vec::new();
-    for c in order {
-        let follows = found.iter_mut().find(|(_, last, _)| {
-            last.step < c.step && norm(sub(last.position, c.position)) <= last.radius.max(c.radius)
-        });
-        match follows {
-            Some((_, last, seen)) => {
-                *last = c;
-                *seen += 1;
-            }
-            None => found.push((c, c, 1)),
-        }
-    }
-    let mut out: Vec<Saddle> = found
-        .into_iter()
-        .filter_map(|(first, last, seen)| {
+) -> Vec<(Saddle, Option<[f64; 3]>)> {
+    let mut out: Vec<(Saddle, Option<[f64; 3]>)> = followed
+        .iter()
+        .filter_map(|&Followed { first, last, seen }| {
             let hessian = first.hessian.or(last.hessian)?;
-            Some(Saddle {
+            let saddle = Saddle {
                 vertex: first.vertex,
                 position: first.position,
                 vertex_position: first.position,
@@ -208,10 +190,11 @@ fn completions(
                 hessian,
                 normal: first.axis,
                 normal_from: NormalSource::UpperLink,
-            })
+            };
+            Some((saddle, first.cycle_normal))
         })
         .collect();
-    out.sort_by(|a, b| {
+    out.sort_by(|(a, _), (b, _)| {
         b.persistence
             .cmp(&a.persistence)
             .then(a.step.cmp(&b.step))
@@ -220,17 +203,24 @@ fn completions(
     out
 }
 
-/// Each completion cut four ways: along its upper link's axis, then along each of
-/// its Hessian's eigenvectors.
-fn four_ways(completions: Vec<Saddle>) -> Vec<Saddle> {
+/// Each completion cut up to five ways: along its upper link's axis, along its
+/// cycle's normal where it has one, then along each of its Hessian's eigenvectors.
+fn cut_ways(completions: Vec<(Saddle, Option<[f64; 3]>)>) -> Vec<Saddle> {
     completions
         .into_iter()
-        .flat_map(|c| {
-            std::iter::once(c).chain((0..3).map(move |k| Saddle {
-                normal: c.hessian.eigenvectors[k],
-                normal_from: NormalSource::Eigenvector { index: k },
+        .flat_map(|(c, cycle)| {
+            let around = cycle.map(|normal| Saddle {
+                normal,
+                normal_from: NormalSource::Cycle,
                 ..c
-            }))
+            });
+            std::iter::once(c)
+                .chain(around)
+                .chain((0..3).map(move |k| Saddle {
+                    normal: c.hessian.eigenvectors[k],
+                    normal_from: NormalSource::Eigenvector { index: k },
+                    ..c
+                }))
         })
         .collect()
 }

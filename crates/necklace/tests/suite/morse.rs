@@ -600,7 +600,7 @@ fn around_a_trefoil_knot_one_cycle_is_essential_and_the_others_are_filled() {
 }
 
 #[test]
-fn a_varying_torus_completion_is_cut_across_its_thinnest_part_from_its_upper_link() {
+fn a_varying_torus_completion_is_cut_across_its_thinnest_part_by_its_upper_link_and_its_cycle() {
     // The tube's radius is r0 (1 + a cos θ): thinnest at θ = π, x = −R. Every level
     // closes the one essential cycle there, at a vertex whose upper link lies in two
     // parts along the core circle: the axis between them is the core's tangent (y), so
@@ -613,13 +613,26 @@ fn a_varying_torus_completion_is_cut_across_its_thinnest_part_from_its_upper_lin
         .filter(|c| c.normal_from == NormalSource::UpperLink)
         .collect();
     assert!(!axes.is_empty());
-    // Four seeds per completion: its axis, then its Hessian's three eigenvectors.
-    assert_eq!(r.completions.len(), 4 * axes.len());
-    for (k, c) in r.completions.chunks(4).enumerate() {
-        assert_eq!(c[0].normal_from, NormalSource::UpperLink);
-        for (j, e) in c[1..].iter().enumerate() {
-            assert_eq!(e.normal_from, NormalSource::Eigenvector { index: j }, "{k}");
+    // Per completion: its axis, its cycle's normal where it has one, then its
+    // Hessian's three eigenvectors.
+    let starts: Vec<usize> = (0..r.completions.len())
+        .filter(|&i| r.completions[i].normal_from == NormalSource::UpperLink)
+        .chain([r.completions.len()])
+        .collect();
+    assert_eq!(starts[0], 0);
+    for w in starts.windows(2) {
+        let c = &r.completions[w[0]..w[1]];
+        let eigen = if c.len() == 5 {
+            assert_eq!(c[1].normal_from, NormalSource::Cycle);
+            &c[2..]
+        } else {
+            &c[1..]
+        };
+        assert_eq!(eigen.len(), 3);
+        for (j, e) in eigen.iter().enumerate() {
+            assert_eq!(e.normal_from, NormalSource::Eigenvector { index: j });
             assert_eq!(e.normal, c[0].hessian.eigenvectors[j]);
+            assert_eq!(e.position, c[0].position);
         }
     }
     let most = axes[0];
@@ -627,4 +640,9 @@ fn a_varying_torus_completion_is_cut_across_its_thinnest_part_from_its_upper_lin
     assert!(most.persistence + 1 >= r.steps.len() / 2, "{most:?}");
     assert!(distance(most.position, [-1.0, 0.0, 0.0]) < 0.1, "{most:?}");
     assert!(angle_deg(most.normal, [0.0, 1.0, 0.0]) < 20.0, "{most:?}");
+    // Its cycle goes once round the core circle, centred on the axis: the plane
+    // through it and the axis is the one of the meridian, normal to y too.
+    let cycle = r.completions[1];
+    assert_eq!(cycle.normal_from, NormalSource::Cycle);
+    assert!(angle_deg(cycle.normal, [0.0, 1.0, 0.0]) < 20.0, "{cycle:?}");
 }
