@@ -199,26 +199,3 @@ pub fn illinois_root(
     }
     t
 }
-
-/// Unit normal of the least-squares plane through `points` about `center` (the
-/// smallest principal axis of their covariance), its sign arbitrary; zero when there
-/// is none (no points, or not finite).
-pub fn least_squares_normal(points: &[[f64; 3]], center: [f64; 3]) -> [f64; 3] {
-    let mut cov = nalgebra::Matrix3::<f64>::zeros();
-    for p in points {
-        let d = nalgebra::Vector3::from(sub(*p, center));
-        cov += d * d.transpose();
-    }
-    if cov.iter().any(|x| !x.is_finite()) {
-        return [0.0; 3];
-    }
-    let eig = nalgebra::SymmetricEigen::new(cov);
-    let e = eig.eigenvectors.column(eig.eigenvalues.imin());
-    let normal = [e[0], e[1], e[2]];
-    let l = norm(normal);
-    if l > 0.0 {
-        scale(normal, 1.0 / l)
-    } else {
-        [0.0; 3]
-    }
-}

@@ -7,7 +7,7 @@ use super::{
     fit_lasso, membrane, Candidate, DropReason, DroppedLoop, LoopOptions, LoopResult, NeckLoop,
     Role, Seed, TightenStatus, TighteningReport,
 };
-use crate::geom::{add, closest_on_segment, cross, dot, least_squares_normal, norm, scale, sub};
+use crate::geom::{add, closest_on_segment, cross, dot, norm, scale, sub};
 use crate::mesh::{Side, SurfaceMesh, Z2Basis};
 
 /// One loop per neck. Cycle-closing loops: one per independent homology class, shortest
@@ -293,7 +293,15 @@ pub fn centroid(points: &[[f64; 3]]) -> [f64; 3] {
 /// Unit normal of the least-squares plane through the points (smallest principal axis of
 /// their covariance), oriented along the loop's vector area.
 pub fn best_fit_normal(points: &[[f64; 3]], center: [f64; 3]) -> [f64; 3] {
-    let normal = least_squares_normal(points, center);
+    let mut cov = nalgebra::Matrix3::<f64>::zeros();
+    for p in points {
+        let d = nalgebra::Vector3::from(sub(*p, center));
+        cov += d * d.transpose();
+    }
+    let eig = nalgebra::SymmetricEigen::new(cov);
+    let k = eig.eigenvalues.imin();
+    let e = eig.eigenvectors.column(k);
+    let mut normal = [e[0], e[1], e[2]];
     let n = points.len();
     let mut area = [0.0; 3];
     for i in 0..n {
@@ -303,7 +311,11 @@ pub fn best_fit_normal(points: &[[f64; 3]], center: [f64; 3]) -> [f64; 3] {
         );
     }
     if dot(area, normal) < 0.0 {
-        scale(normal, -1.0)
+        normal = scale(normal, -1.0);
+    }
+    let l = norm(normal);
+    if l > 0.0 {
+        scale(normal, 1.0 / l)
     } else {
         normal
     }

@@ -74,6 +74,18 @@ pub fn hessian_at(mesh: &TetMesh, f: &[f64], v: u32) -> Option<Hessian> {
     fit(&offsets, &values, scale)
 }
 
+/// The unit normal of the least-squares plane through `points` about `center` (the
+/// eigenvector of their scatter's smallest eigenvalue), its sign arbitrary.
+pub(super) fn plane_normal(points: &[[f64; 3]], center: [f64; 3]) -> [f64; 3] {
+    let scatter = points.iter().fold(Matrix3::zeros(), |m, p| {
+        let d = nalgebra::Vector3::new(p[0] - center[0], p[1] - center[1], p[2] - center[2]);
+        m + d * d.transpose()
+    });
+    let eigen = SymmetricEigen::new(scatter);
+    let e = eigen.eigenvectors.column(eigen.eigenvalues.imin());
+    [e[0], e[1], e[2]]
+}
+
 /// `v` and every vertex sharing a tet with one of `seeds`, sorted.
 fn neighbours(mesh: &TetMesh, seeds: &[u32]) -> Vec<u32> {
     let mut out: Vec<u32> = seeds.to_vec();

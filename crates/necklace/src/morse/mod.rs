@@ -81,7 +81,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::geom::{add, cross, dot, least_squares_normal, norm, scale, sub};
+use crate::geom::{add, cross, dot, norm, scale, sub};
 use crate::progress::{Progress, Silent};
 use crate::tet::{TetMesh, VertexKind};
 
@@ -89,6 +89,7 @@ pub use critical::{
     classify, expected_morse_sum, Classification, LinkSides, Links, MorseExpectation, VertexClass,
     VertexType,
 };
+use hessian::plane_normal;
 pub use hessian::{hessian_at, Hessian};
 pub use laplacian::{cotangent_stiffness, lumped_mass, SparseMatrix};
 pub use result::{
@@ -617,10 +618,7 @@ fn cycle_normal(positions: &[[f64; 3]], path: &[u32]) -> Option<[f64; 3]> {
         points.iter().fold([0.0; 3], |s, &p| add(s, p)),
         1.0 / points.len() as f64,
     );
-    let normal = cross(
-        least_squares_normal(&points, centroid),
-        sub(points[0], centroid),
-    );
+    let normal = cross(plane_normal(&points, centroid), sub(points[0], centroid));
     let length = norm(normal);
     (length > 0.0 && length.is_finite()).then(|| scale(normal, 1.0 / length))
 }
