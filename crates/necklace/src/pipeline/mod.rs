@@ -381,36 +381,13 @@ fn find_side(
             boundary.num_triangles()
         ));
     }
-    let cut_loops = |seeds: &[Seed]| -> Result<LoopResult> {
-        let found = match &boundary {
-            Some(boundary) => loops::find_loops_with_progress(
-                boundary,
-                None,
-                seeds,
-                side,
-                &loop_options,
-                progress,
-            )?,
-            None => loops::find_loops_with_progress(
-                surface,
-                Some(&prepared.distance),
-                seeds,
-                side,
-                &loop_options,
-                progress,
-            )?,
-        };
-        // On a simplified copy: the same planes cut the input, and the loops are
-        // tightened there.
-        match carry {
-            Some(c) => {
-                let input = &c.prepared;
-                let to = c.surface.get_or_init(|| LoopSurface::new(&input.mesh));
-                let distance = &input.distance;
-                loops::transfer_loops(&input.mesh, to, distance, seeds, found, &loop_options)
-            }
-            None => Ok(found),
-        }
+    let cutter = LoopCutter {
+        surface: boundary.as_ref().unwrap_or(surface),
+        distance: boundary.is_none().then_some(&prepared.distance),
+        carry,
+        side,
+        options: &loop_options,
+        progress,
     };
     let genus = prepared
         .mesh_report
@@ -418,43 +395,16 @@ fn find_side(
         .iter()
         .map(|c| c.genus)
         .sum::<Option<i64>>();
-    let off_genus = |found: &LoopResult| genus.map(|g| loop_rank(&found.loops) as i64 - g);
-    let homology = loop_options.homology_selection;
-    // 5b. Classes of the genus that no selected saddle's loop reaches: loops from the
-    //     vertices that close them but fail as necks (walls a cell or two thick give
-    //     no 2-saddle Hessian), kept only where they add a class.
-    let completions = completion_seeds(&result);
-    let completed = |seeds: &[Seed]| -> Result<(LoopResult, bool)> {
-        let mut found = cut_loops(seeds)?;
-        let missing = off_genus(&found).is_some_and(|d| d < 0);
-        let complete = missing && homology && !completions.is_empty();
-        if complete {
-            let extra = cut_loops(&completions)?;
-            loops::complete_classes(&mut found, extra, seeds.len());
-        }
-        Ok((found, complete))
+    let (found, completed_with) = match genus.filter(|_| loop_options.homology_selection) {
+        Some(g) => loops_to_genus(
+            &cutter,
+            &seeds,
+            &completion_seeds(&result),
+            g,
+            &mut warnings,
+        )?,
+        None => (cutter.cut(&seeds)?, false),
     };
-    let (mut found, mut completed_with) = completed(&seeds)?;
-    // 5c. More classes than the genus: some loop bounds no disk on this side (its
-    //     plane's curve has another inside it: a cross-section with holes). Cut again
-    //     keeping only curves that bound disks (and complete that); taken when it is
-    //     nearer the genus.
-    if let Some(over) = off_genus(&found).filter(|&d| d > 0 && homology) {
-        let strict: Vec<Seed> = seeds
-            .iter()
-            .map(|s| Seed {
-                disk_only: true,
-                ..*s
-            })
-            .collect();
-        let (again, with) = completed(&strict)?;
-        if let Some(d) = off_genus(&again).filter(|d| d.abs() < over) {
-            warnings.push(format!(
-                "{name}: the loops spanned {over} classes more than the genus; cut again keeping only plane curves that bound a disk on this side (now {d:+})"
-            ));
-            (found, completed_with) = (again, with);
-        }
-    }
     let mut saddles = result.saddles.clone();
     if completed_with {
         saddles.extend(result.completions.iter().copied());
@@ -536,6 +486,92 @@ fn find_side(
         dropped: found.dropped,
         warnings,
     }))
+}
+
+/// The loop stage for one side's seeds: on `surface` (the input, or the volume mesh's
+/// boundary where a neck lies by a self-crossing; `distance` is the input's), and with
+/// `carry`, carried back from the simplified copy to the input.
+struct LoopCutter<'a> {
+    surface: &'a SurfaceMesh,
+    distance: Option<&'a SurfaceDistance>,
+    carry: Option<&'a Carry<'a>>,
+    side: Side,
+    options: &'a LoopOptions,
+    progress: &'a dyn Progress,
+}
+
+impl LoopCutter<'_> {
+    fn cut(&self, seeds: &[Seed]) -> Result<LoopResult> {
+        let (surface, options) = (self.surface, self.options);
+        let found = loops::find_loops_with_progress(
+            surface,
+            self.distance,
+            seeds,
+            self.side,
+            options,
+            self.progress,
+        )?;
+        // On a simplified copy: the same planes cut the input, and the loops are
+        // tightened there.
+        match self.carry {
+            Some(c) => {
+                let input = &c.prepared;
+                let to = c.surface.get_or_init(|| LoopSurface::new(&input.mesh));
+                loops::transfer_loops(&input.mesh, to, &input.distance, seeds, found, options)
+            }
+            None => Ok(found),
+        }
+    }
+}
+
+/// The loops of `seeds`, brought to the side's `genus` where they span another number
+/// of classes; and whether the `completions` were cut (their seeds then follow
+/// `seeds`' in the result's numbering).
+/// 1. Fewer classes than the genus: loops from the completions (the vertices that close
+///    the missing classes but fail as necks: walls a cell or two thick give them no
+///    2-saddle Hessian), each kept where it adds a class (`loops::complete_classes`).
+/// 2. More: some loop bounds no disk on this side (its plane's curve has another inside
+///    it: a cross-section with holes). Every seed is cut again keeping only curves that
+///    bound disks, and completed; taken, with a warning, when nearer the genus.
+fn loops_to_genus(
+    cutter: &LoopCutter,
+    seeds: &[Seed],
+    completions: &[Seed],
+    genus: i64,
+    warnings: &mut Vec<String>,
+) -> Result<(LoopResult, bool)> {
+    let off_genus = |found: &LoopResult| loop_rank(&found.loops) as i64 - genus;
+    let completed = |seeds: &[Seed]| -> Result<(LoopResult, bool)> {
+        let mut found = cutter.cut(seeds)?;
+        let complete = off_genus(&found) < 0 && !completions.is_empty();
+        if complete {
+            let extra = cutter.cut(completions)?;
+            loops::complete_classes(&mut found, extra, seeds.len());
+        }
+        Ok((found, complete))
+    };
+    let first = completed(seeds)?;
+    let over = off_genus(&first.0);
+    if over <= 0 {
+        return Ok(first);
+    }
+    let strict: Vec<Seed> = seeds
+        .iter()
+        .map(|s| Seed {
+            disk_only: true,
+            ..*s
+        })
+        .collect();
+    let again = completed(&strict)?;
+    let d = off_genus(&again.0);
+    if d.abs() >= over {
+        return Ok(first);
+    }
+    warnings.push(format!(
+        "{}: the loops spanned {over} classes more than the genus; cut again keeping only plane curves that bound a disk on this side (now {d:+})",
+        cutter.side.name()
+    ));
+    Ok(again)
 }
 
 /// The Z2 rank of the loops' homology classes.
