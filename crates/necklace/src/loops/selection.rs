@@ -351,7 +351,7 @@ pub fn complete_classes(found: &mut LoopResult, extra: LoopResult, offset: usize
         let class = l.class();
         if !l.separating && basis.insert(&class) {
             l.reason = format!(
-                "completes the genus: its saddle closes a class of it that no selected saddle's loop reaches, but has no 2-saddle Hessian at any level (cut normal from its upper link); {}",
+                "completes the genus: its vertex closes a class of it that no selected saddle's loop reaches, and its plane's curve bounds a disk; {}",
                 l.reason
             );
             placed[k] = Some(found.loops.len());

@@ -291,32 +291,32 @@ struct Observation {
     hessian: Option<Hessian>,
 }
 
-/// A vertex that closes an essential cycle at one level (a 2-saddle or a degenerate
-/// saddle, [`Closer`]), with the axis between the two components of its upper link the
-/// cycle closes through ([`Links::upper_axis`]) and its Hessian: what a completion is
-/// made from.
+/// The first vertex of a completion: one that closes an essential cycle at some level
+/// (a 2-saddle or a degenerate saddle, [`Closer`]) with no completion within the
+/// matching radius at the level before, and what it is cut with: the axis between the
+/// two components of its upper link the cycle closes through ([`Links::upper_axis`]),
+/// its Hessian, and the normal of the plane through it that holds its cycle's centre
+/// and best-fit normal ([`cycle_normal`]).
 #[derive(Debug, Clone, Copy)]
 struct Closing {
     step: usize,
     vertex: u32,
     position: [f64; 3],
-    /// The matching radius there.
-    radius: f64,
     value: f64,
     axis: [f64; 3],
-    hessian: Option<Hessian>,
-    /// For the first closing of a completion: the normal of the plane through the
-    /// vertex that holds the cycle's centre and its best-fit plane's normal
-    /// ([`cycle_normal`]).
+    hessian: Hessian,
     cycle_normal: Option<[f64; 3]>,
 }
 
-/// A completion followed over levels: its first closing, its last, and the levels it
-/// was seen at.
+/// A completion followed over levels: its first closing; where the last vertex that
+/// followed it was, at which level, and the matching radius there; the levels it was
+/// seen at.
 #[derive(Debug, Clone, Copy)]
 struct Followed {
     first: Closing,
-    last: Closing,
+    last_step: usize,
+    last_position: [f64; 3],
+    last_radius: f64,
     seen: usize,
 }
 
@@ -547,8 +547,11 @@ fn plan_steps(mesh: &TetMesh, options: &MorseOptions) -> Vec<PlannedStep> {
     }
 }
 
-/// Record every vertex of this level that closes an essential cycle, where its upper
-/// link gives an axis.
+/// Follow the completions to this level's vertices that close essential cycles: each
+/// within the matching radius of a completion last seen at an earlier level follows
+/// it, like a track (by vertex index, the first such completion); the others start
+/// completions, measured here (axis, Hessian, cycle: only for these, not for every
+/// closing at every level), where their upper link gives an axis and a quadratic fits.
 fn record_closings(
     (mesh, links, sweep): (&TetMesh, &Links, &Sweep),
     f: &[f64],
@@ -557,51 +560,45 @@ fn record_closings(
     track_radius: f64,
     followed: &mut Vec<Followed>,
 ) {
-    let mut found: Vec<(Closing, Closer)> = closers
-        .par_iter()
-        .filter_map(|c| {
-            let v = c.vertex as usize;
-            let closing = Closing {
-                step,
-                vertex: c.vertex,
-                position: mesh.positions[v],
-                radius: track_radius * mean_edge_length(mesh, v),
-                value: f[v],
-                axis: links.upper_axis(v, f, &mesh.positions, c.through)?,
-                hessian: hessian_at(mesh, f, c.vertex),
-                cycle_normal: None,
-            };
-            Some((closing, *c))
-        })
-        .collect();
-    found.sort_by_key(|(c, _)| c.vertex);
-    // A closing within the matching radius of a completion's last one (seen at an
-    // earlier level) follows it, like a track; the others start completions.
+    let mut closers = closers.to_vec();
+    closers.sort_by_key(|c| c.vertex);
     let mut fresh = Vec::new();
-    for (c, closer) in found {
+    for c in closers {
+        let v = c.vertex as usize;
+        let (position, radius) = (mesh.positions[v], track_radius * mean_edge_length(mesh, v));
         let follows = followed.iter_mut().find(|f| {
-            f.last.step < c.step
-                && norm(sub(f.last.position, c.position)) <= f.last.radius.max(c.radius)
+            f.last_step < step && norm(sub(f.last_position, position)) <= f.last_radius.max(radius)
         });
         match follows {
             Some(f) => {
-                f.last = c;
+                (f.last_step, f.last_position, f.last_radius) = (step, position, radius);
                 f.seen += 1;
             }
-            None => fresh.push((c, closer)),
+            None => fresh.push((c, radius)),
         }
     }
     let fresh: Vec<Followed> = fresh
         .into_par_iter()
-        .map(|(mut c, closer)| {
-            c.cycle_normal = sweep
-                .cycle_through(closer, f, CYCLE_SEARCH_LIMIT)
-                .and_then(|path| cycle_normal(&mesh.positions, &path));
-            Followed {
-                first: c,
-                last: c,
+        .filter_map(|(c, radius)| {
+            let v = c.vertex as usize;
+            let first = Closing {
+                step,
+                vertex: c.vertex,
+                position: mesh.positions[v],
+                value: f[v],
+                axis: links.upper_axis(v, f, &mesh.positions, c.through)?,
+                hessian: hessian_at(mesh, f, c.vertex)?,
+                cycle_normal: sweep
+                    .cycle_through(c, f, CYCLE_SEARCH_LIMIT)
+                    .and_then(|path| cycle_normal(&mesh.positions, &path)),
+            };
+            Some(Followed {
+                first,
+                last_step: step,
+                last_position: first.position,
+                last_radius: radius,
                 seen: 1,
-            }
+            })
         })
         .collect();
     followed.extend(fresh);

@@ -97,10 +97,10 @@ pub struct Saddle {
     /// schedule) the cycle it closed was essential, never filled again (see
     /// [`roles`](super::roles)); false when every cycle it closed was noise or a second copy.
     pub essential: bool,
-    /// The fitted Hessian (for a completion, one that failed the 2-saddle test).
+    /// The fitted Hessian (for a completion, of any signature).
     pub hessian: Hessian,
     /// Cutting-plane normal: the eigenvector of the positive eigenvalue, or for a
-    /// completion its upper link's axis (`normal_from`).
+    /// completion one of its cutting directions (`normal_from`).
     pub normal: [f64; 3],
     /// Where `normal` comes from.
     #[serde(default)]
@@ -115,8 +115,8 @@ pub enum NormalSource {
     #[default]
     Hessian,
     /// The axis between the two components of its upper link
-    /// ([`Links::upper_axis`](super::Links::upper_axis)): a completion, whose Hessian
-    /// has no 2-saddle signature at any level.
+    /// ([`Links::upper_axis`](super::Links::upper_axis)) that its cycle closes
+    /// through: a completion's first cut.
     UpperLink,
     /// The plane through it that holds its cycle's centroid and best-fit normal (the
     /// cycle it closes, found in the superlevel set): a completion cut across the bar
@@ -259,13 +259,15 @@ pub struct MorseResult {
     pub saddles: Vec<Saddle>,
     /// 2-saddle tracks that were not selected, and why (paper: those alive at `N`).
     pub rejected: Vec<RejectedSaddle>,
-    /// Scale space: the tracks rejected for their Hessian (listed in `rejected`) that
-    /// close an essential cycle of the genus at some level, as saddles with their
-    /// upper link's axis for normal, most persistent first; closer ones merged as in
-    /// the selection. Not necks by their shape (walls a lattice cell or two thick give
-    /// the quadratic fit no 2-saddle), but the cycle is one the surface has: the
-    /// pipeline cuts loops from them only when the selected saddles' loops miss some
-    /// of the genus's classes. Empty on the paper's schedule.
+    /// Scale space: the vertices that close the essential cycles (the genus's classes)
+    /// at each level, 2-saddles or degenerate saddles, followed over the levels within
+    /// the matching radius; each at its first level, cut up to five ways in a row (its
+    /// upper link's axis, its cycle's plane where it has one, its Hessian's three
+    /// eigenvectors: `normal_from`), most persistent first. Not necks by their shape
+    /// (walls a lattice cell or two thick give the quadratic fit no 2-saddle; a
+    /// degenerate saddle is no track), but each closes a class the surface has: the
+    /// pipeline cuts loops from them only when the selected saddles' loops miss some of
+    /// the genus's classes. Empty on the paper's schedule.
     #[serde(default)]
     pub completions: Vec<Saddle>,
     /// Every 2-saddle track of the run with its scale interval: the barcode.

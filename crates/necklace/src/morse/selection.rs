@@ -17,8 +17,8 @@ pub(super) struct Selection {
     pub saddles: Vec<Saddle>,
     /// Every other 2-saddle track, and why.
     pub rejected: Vec<RejectedSaddle>,
-    /// Scale space only: tracks rejected for their Hessian that close an essential
-    /// cycle (see [`MorseResult::completions`](super::MorseResult::completions)).
+    /// Scale space only: the vertices that close essential cycles, cut several ways
+    /// (see [`MorseResult::completions`](super::MorseResult::completions)).
     pub completions: Vec<Saddle>,
 }
 
@@ -165,34 +165,40 @@ fn completions(
 ) -> Vec<(Saddle, Option<[f64; 3]>)> {
     let mut out: Vec<(Saddle, Option<[f64; 3]>)> = followed
         .iter()
-        .filter_map(|&Followed { first, last, seen }| {
-            let hessian = first.hessian.or(last.hessian)?;
-            let saddle = Saddle {
-                vertex: first.vertex,
-                position: first.position,
-                vertex_position: first.position,
-                value: first.value,
-                step: first.step,
-                scale: scale_of(first.step).unwrap_or(0.0),
-                born: first.step,
-                persistence: seen - 1,
-                birth_scale: scale_of(first.step).unwrap_or(0.0),
-                death_scale: if last.step >= levels {
-                    None
-                } else {
-                    scale_of(last.step + 1)
-                },
-                role: SaddleRole::CycleClosing,
-                bulge: None,
-                by_bulge: false,
-                lobe: None,
-                essential: true,
-                hessian,
-                normal: first.axis,
-                normal_from: NormalSource::UpperLink,
-            };
-            Some((saddle, first.cycle_normal))
-        })
+        .map(
+            |&Followed {
+                 first,
+                 last_step,
+                 seen,
+                 ..
+             }| {
+                let saddle = Saddle {
+                    vertex: first.vertex,
+                    position: first.position,
+                    vertex_position: first.position,
+                    value: first.value,
+                    step: first.step,
+                    scale: scale_of(first.step).unwrap_or(0.0),
+                    born: first.step,
+                    persistence: seen - 1,
+                    birth_scale: scale_of(first.step).unwrap_or(0.0),
+                    death_scale: if last_step >= levels {
+                        None
+                    } else {
+                        scale_of(last_step + 1)
+                    },
+                    role: SaddleRole::CycleClosing,
+                    bulge: None,
+                    by_bulge: false,
+                    lobe: None,
+                    essential: true,
+                    hessian: first.hessian,
+                    normal: first.axis,
+                    normal_from: NormalSource::UpperLink,
+                };
+                (saddle, first.cycle_normal)
+            },
+        )
         .collect();
     out.sort_by(|(a, _), (b, _)| {
         b.persistence
