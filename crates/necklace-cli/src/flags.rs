@@ -311,6 +311,11 @@ pub struct MethodArgs {
     /// estimated over it is refused before it is built.
     #[arg(long, default_value = "8G", value_parser = parse_memory, allow_negative_numbers = true)]
     pub max_memory: u64,
+    /// The volume mesher: necklace's isosurface stuffing, the Delaunay tetrahedralization
+    /// of points sampled on the surface (`sampled`, experimental), or TetGen "pq1.2"
+    /// (needs a build with --features tetgen, which is AGPL-3.0).
+    #[arg(long, value_enum, default_value = "stuffing")]
+    pub mesher: MesherArg,
     /// The most heat steps (--levels, or --steps with the paper schedule) a run may
     /// take: more is refused before any work.
     #[arg(long, default_value_t = necklace::morse::DEFAULT_MAX_STEPS, allow_negative_numbers = true)]
@@ -327,6 +332,7 @@ impl MethodArgs {
         VolumeOptions {
             h: self.h,
             max_memory: self.max_memory,
+            mesher: self.mesher.into(),
             ..VolumeOptions::default()
         }
     }
@@ -383,6 +389,7 @@ impl From<ScheduleArg> for Schedule {
 pub enum MesherArg {
     Stuffing,
     Tetgen,
+    Sampled,
 }
 
 pub fn parse_param(s: &str) -> std::result::Result<(String, f64), String> {
@@ -401,6 +408,7 @@ impl From<MesherArg> for Mesher {
         match m {
             MesherArg::Stuffing => Mesher::Stuffing,
             MesherArg::Tetgen => Mesher::Tetgen,
+            MesherArg::Sampled => Mesher::Sampled,
         }
     }
 }

@@ -8,7 +8,7 @@
 //! fixed-size traversal stacks below. Triangles are stored reordered so that every node,
 //! leaf or not, owns a contiguous range of them.
 
-use crate::geom::{closest_on_triangle, cross, dot, norm, sub};
+use crate::geom::{bounds, closest_on_triangle, cross, dot, norm, sub};
 
 /// A node splits when it holds more triangles than this (leaves hold 4 to 8).
 pub(super) const LEAF_SIZE: usize = 8;
@@ -186,7 +186,7 @@ impl Bvh {
             let node = &self.nodes[stack[sp] as usize];
             if node.is_leaf() {
                 for t in node.start as usize..node.end as usize {
-                    let (tlo, thi) = bounds(self.tris[t].into_iter());
+                    let (tlo, thi) = bounds(self.tris[t]);
                     if (0..3).all(|k| tlo[k] <= hi[k] && lo[k] <= thi[k]) {
                         out.push(t);
                     }
@@ -373,19 +373,6 @@ fn split(items: &mut [Item]) -> usize {
         a.centroid_on(axis).total_cmp(&b.centroid_on(axis))
     });
     mid
-}
-
-/// Axis-aligned bounds of some points (NaN coordinates are ignored by `min`/`max`).
-fn bounds(points: impl Iterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    (lo, hi)
 }
 
 /// Whether two triangles cross: an edge of one passes through the interior of the

@@ -51,12 +51,14 @@
 
 mod background;
 mod chords;
+mod delaunay;
 mod domains;
 mod features;
 mod octree;
 mod prediction;
 mod quality;
 mod repair;
+mod sampled;
 mod sizing;
 mod stuffing;
 mod surface;
@@ -76,6 +78,7 @@ pub use features::SharpFeatures;
 use octree::{Cell, Key, Octree};
 pub use prediction::expected_topology;
 pub use quality::QualityStats;
+pub use sampled::SampledStats;
 use sizing::clamp_spacing;
 pub use sizing::{spacing_floor, SizingFeature};
 pub use surface::{

@@ -39,6 +39,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::prediction::predict;
+use super::sampled::SampledStats;
 use super::surface_sizing::{
     sample_thickness, sharp_features, thickness, thin_part_sizing, ThicknessSamples, CELLS_ACROSS,
     MAX_SAMPLES, THIN_FACTOR,
@@ -62,6 +63,9 @@ pub enum Mesher {
     /// TetGen with the paper's switches "pq1.2"; needs the `tetgen` cargo feature
     /// (AGPL-3.0).
     Tetgen,
+    /// The Delaunay tetrahedralization of points sampled on the surface at its
+    /// thickness and graded inside, carved by the surface (`sampled`; experimental).
+    Sampled,
 }
 
 /// Options of [`volume_mesh`].
@@ -128,6 +132,8 @@ pub struct VolumeResult {
     pub mesher: Mesher,
     /// The stuffing mesher's counts of the last round (`None` for TetGen).
     pub stats: Option<StuffingStats>,
+    /// What the sampled mesher did (with [`Mesher::Sampled`]).
+    pub sampled: Option<SampledStats>,
     /// Surface vertices whose part or gap is thinner than `2h`.
     pub thin_vertices: usize,
     /// Points on the surface's triangles where the thickness was measured besides
@@ -218,6 +224,8 @@ pub struct VolumeReport {
     pub thickness_samples: usize,
     /// The stuffing mesher's counts (last round; absent for TetGen).
     pub stuffing: Option<StuffingStats>,
+    /// What the sampled mesher did (with [`Mesher::Sampled`]).
+    pub sampled: Option<SampledStats>,
     /// One line per thing to know (see [`VolumeResult::warnings`]).
     pub warnings: Vec<String>,
     /// Wall-clock seconds.
@@ -272,6 +280,7 @@ impl VolumeResult {
             thin_vertices: self.thin_vertices,
             thickness_samples: self.thickness_samples,
             stuffing: self.stats,
+            sampled: self.sampled,
             warnings: self.warnings.clone(),
             seconds: self.seconds,
         }
@@ -384,7 +393,7 @@ pub fn survey_surface(
         None => distance.self_intersections(&surface.triangles),
     };
     let sizing = match options.mesher {
-        Mesher::Stuffing => Some(size_surface(surface, distance, &crossings, h)),
+        Mesher::Stuffing | Mesher::Sampled => Some(size_surface(surface, distance, &crossings, h)),
         Mesher::Tetgen => None,
     };
     let thin_vertices = sizing.as_ref().map_or(0, |s| {
@@ -430,7 +439,21 @@ pub fn volume_mesh_surveyed(
         ));
         None
     };
+    let mut sampled = None;
     let (mesh, found, stats, rounds, samples) = match &survey.sizing {
+        Some(sizing) if options.mesher == Mesher::Sampled => {
+            let sphere = (side == Side::Outside).then_some((centre, radius));
+            let (mesh, s) = sampled_surface(surface, distance, sizing, sphere, h, options)?;
+            if s.missing_triangles > 0 {
+                warnings.push(format!(
+                    "{} of the {} boundary triangles of the sampled {} volume mesh are not faces of its tetrahedralization after {} rounds of bisection: the carving may cross the surface there",
+                    s.missing_triangles, s.boundary_triangles, side.name(), s.recovery_rounds
+                ));
+            }
+            sampled = Some(s);
+            let found = mesh.topology();
+            (mesh, found, None, 1, 0)
+        }
         Some(sizing) => {
             let sphere = (side == Side::Outside).then_some((centre, radius));
             let (stuffed, found, rounds, samples) = stuff_surface(
@@ -515,6 +538,7 @@ pub fn volume_mesh_surveyed(
         sphere: (side == Side::Outside).then_some((centre, radius)),
         mesher: options.mesher,
         stats,
+        sampled,
         thin_vertices: survey.thin_vertices,
         thickness_samples: samples,
         topology: TopologyCheck {
@@ -868,6 +892,69 @@ fn hausdorff_to_surface(mesh: &TetMesh, distance: &SurfaceDistance) -> f64 {
         .distances(&surface_vertices)
         .into_iter()
         .fold(0.0, f64::max)
+}
+
+/// The sampled mesher (`sampled`) on one side: the surface bisected to the spacing its
+/// thickness and gaps ask for (at most `h`), the sphere at the shell's coarsest spacing,
+/// both refined until their triangles are Delaunay faces.
+fn sampled_surface(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    surveyed: &SurfaceSizing,
+    sphere: Option<([f64; 3], f64)>,
+    h: f64,
+    options: &VolumeOptions,
+) -> Result<(TetMesh, SampledStats)> {
+    use super::sampled::{
+        bisect_triangles, mesh_sampled, sphere_mesh, Sample, SampledOptions, SpacingField,
+    };
+    use super::Domain;
+    // The thickness over the triangles, not only at their corners: a plate drawn
+    // with long triangles is thin between its vertices too.
+    let thickness = sample_thickness(
+        surface,
+        distance,
+        &surveyed.thickness,
+        &surveyed.skip,
+        surveyed.limit,
+    );
+    let vertices: Vec<Sample> = thickness
+        .positions
+        .iter()
+        .zip(&thickness.thickness)
+        .map(|(p, t)| Sample {
+            position: *p,
+            spacing: t[0].min(t[1]).min(h),
+        })
+        .collect();
+    let field = SpacingField::new(&vertices, h);
+    let mut boundary = bisect_triangles(&surface.positions, &surface.triangles, &field);
+    let inside = SurfaceInside {
+        distance,
+        bounds: surface.bounding_box().unwrap_or_default(),
+        sizing: Vec::new(),
+        features: surveyed.features.clone(),
+    };
+    let sampled = SampledOptions {
+        max_tets: (options.max_memory as f64 / super::BYTES_PER_TET) as usize,
+        min_dihedral_deg: options.min_dihedral_deg,
+        ..SampledOptions::default()
+    };
+    match sphere {
+        None => {
+            let samples = boundary.samples(&field);
+            mesh_sampled(&inside, &boundary, &samples, &field, &sampled)
+        }
+        Some((centre, radius)) => {
+            let shell = Shell::new(inside, centre, radius);
+            let coarse = shell.coarsest_spacing(h);
+            boundary.extend(&sphere_mesh(centre, radius, coarse));
+            let samples = boundary.samples(&field);
+            let field = SpacingField::new(&samples, coarse);
+            let samples = boundary.samples(&field);
+            mesh_sampled(&shell, &boundary, &samples, &field, &sampled)
+        }
+    }
 }
 
 #[cfg(feature = "tetgen")]

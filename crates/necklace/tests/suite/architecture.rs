@@ -28,6 +28,7 @@ const CRATES: &[(&str, Option<&[&str]>)] = &[
     ("serde", None),
     ("rayon", None),
     ("tritet", Some(&["volume::tetgen"])),
+    ("robust", Some(&["volume::delaunay"])),
     ("kiddo", Some(&["morse"])),
     ("nalgebra", Some(&["morse", "loops"])),
     ("png", Some(&["render"])),
