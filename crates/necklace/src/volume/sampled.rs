@@ -109,7 +109,7 @@ impl Default for SampledOptions {
 /// unrecovered.
 pub const MAX_MISSING_FOR_QUALITY: f64 = 0.01;
 
-/// What a run of [`mesh_sampled`] did.
+/// What a run of the sampled mesher (`volume::sampled`, `--mesher sampled`) did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct SampledStats {
     /// Samples on the boundary.
@@ -118,7 +118,7 @@ pub struct SampledStats {
     /// tetrahedralization).
     pub boundary_triangles: usize,
     /// Boundary triangles still not faces of the tetrahedralization after
-    /// [`RECOVERY_ROUNDS`] rounds.
+    /// the recovery rounds (at most 12).
     pub missing_triangles: usize,
     /// Rounds of bisection the recovery took.
     pub recovery_rounds: usize,
