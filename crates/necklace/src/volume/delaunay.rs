@@ -33,6 +33,8 @@
 //! batches, as the sampled mesher recovers its boundary).
 
 use robust::{insphere, orient3d, Coord3D};
+
+use super::repair::faces_of;
 use rustc_hash::FxHashMap as HashMap;
 
 /// No neighbour (a face on the outside of the far points).
@@ -104,22 +106,7 @@ impl Tetrahedralization {
 
     /// The faces of the tets without a far point, each as its sorted corners.
     pub fn face_set(&self) -> rustc_hash::FxHashSet<[u32; 3]> {
-        let mut set = rustc_hash::FxHashSet::default();
-        for t in self.t.finish() {
-            for skip in 0..4 {
-                let mut f = [0u32; 3];
-                let mut k = 0;
-                for (i, &c) in t.iter().enumerate() {
-                    if i != skip {
-                        f[k] = c;
-                        k += 1;
-                    }
-                }
-                f.sort_unstable();
-                set.insert(f);
-            }
-        }
-        set
+        self.t.finish().iter().flat_map(faces_of).collect()
     }
 }
 

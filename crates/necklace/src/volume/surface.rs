@@ -358,6 +358,9 @@ struct SurfaceSizing {
     /// The sizing by the thickness sampled over the triangles too: made the first
     /// time a side asks (its vertices' sizing gave another topology), then shared.
     sampled: std::sync::OnceLock<SampledSizing>,
+    /// The thickness sampled over the triangles ([`sample_thickness`]): made the first
+    /// time a side asks (the sampled sizing, or the sampled mesher), then shared.
+    samples: std::sync::OnceLock<ThicknessSamples>,
     /// Creases, corners and the crossing curve to snap onto.
     features: SharpFeatures,
 }
@@ -635,6 +638,7 @@ fn size_surface(
         skip: crossing,
         limit: THIN_FACTOR * h,
         sampled: std::sync::OnceLock::new(),
+        samples: std::sync::OnceLock::new(),
         thickness,
         spacing,
         features,
@@ -656,15 +660,21 @@ impl SurfaceSizing {
     /// The sizing by the thickness sampled over the triangles, made on the first call.
     fn sampled(&self, surface: &SurfaceMesh, distance: &SurfaceDistance) -> &SampledSizing {
         self.sampled.get_or_init(|| {
-            let samples =
-                sample_thickness(surface, distance, &self.thickness, &self.skip, self.limit);
-            let mut sizing = thin_part_sizing(&samples);
+            let samples = self.samples(surface, distance);
+            let mut sizing = thin_part_sizing(samples);
             sizing.extend(&self.crossing_sizing);
             SampledSizing {
                 sizing,
                 points: samples.positions.len() - surface.num_vertices(),
                 bound: samples.bound,
             }
+        })
+    }
+
+    /// The thickness sampled over the triangles, made on the first call.
+    fn samples(&self, surface: &SurfaceMesh, distance: &SurfaceDistance) -> &ThicknessSamples {
+        self.samples.get_or_init(|| {
+            sample_thickness(surface, distance, &self.thickness, &self.skip, self.limit)
         })
     }
 }
@@ -911,13 +921,7 @@ fn sampled_surface(
     use super::Domain;
     // The thickness over the triangles, not only at their corners: a plate drawn
     // with long triangles is thin between its vertices too.
-    let thickness = sample_thickness(
-        surface,
-        distance,
-        &surveyed.thickness,
-        &surveyed.skip,
-        surveyed.limit,
-    );
+    let thickness = surveyed.samples(surface, distance);
     let vertices: Vec<Sample> = thickness
         .positions
         .iter()

@@ -153,6 +153,7 @@ fn unit(n: [f64; 3]) -> [f64; 3] {
 /// The thickness sampled over the surface: its vertices, and points added on triangles
 /// where the vertices alone do not tell ([`sample_thickness`]). Triangles lie on the
 /// surface's triangles, the first points are its vertices.
+#[derive(Debug, Clone)]
 pub(super) struct ThicknessSamples {
     /// The points: the surface's vertices, then the added ones.
     pub positions: Vec<[f64; 3]>,
