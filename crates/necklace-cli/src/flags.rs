@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand};
 use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Preconditioner, Schedule, SolverOptions};
-use necklace::pipeline::InputOptions;
+use necklace::pipeline::{InputOptions, NeckOptions};
 use necklace::simplify::SimplifyOptions;
 use necklace::volume::{Mesher, VolumeOptions};
 
@@ -130,45 +130,8 @@ pub enum Command {
     Loops {
         /// The closed surface mesh.
         mesh: PathBuf,
-        /// Find handle loops (inside).
-        #[arg(long)]
-        handles: bool,
-        /// Find tunnel loops (outside).
-        #[arg(long)]
-        tunnels: bool,
-        /// Run the two sides one after the other instead of at the same time: slower
-        /// (about 1.25x on 2 cores), with the peak memory of the larger side instead of
-        /// both (the boot: 1.24 GB instead of 1.86 GB).
-        #[arg(long)]
-        one_side_at_a_time: bool,
-        /// Simplify a surface with more triangles than this (0: never) for the volume
-        /// mesh, distance field and saddles; the loops are cut again with the same
-        /// planes and tightened on the input.
-        #[arg(long, default_value_t = SimplifyOptions::default().above, value_name = "TRIANGLES")]
-        simplify_above: usize,
-        /// How many triangles the simplified copy keeps.
-        #[arg(long, default_value_t = SimplifyOptions::default().target, value_name = "TRIANGLES")]
-        simplify_to: usize,
         #[command(flatten)]
-        method: MethodArgs,
-        /// Where the plane through a saddle has no curve around it: parallel planes tried
-        /// on each side, 0.125 % of the diagonal apart.
-        #[arg(long, default_value_t = LoopOptions::default().plane_offsets, allow_negative_numbers = true)]
-        plane_offsets: usize,
-        /// A kept cycle-closing loop is also cut from parallel planes up to this many
-        /// steps (0.5 % of the diagonal) away on each side, and the shortest loop of its
-        /// class wins (0: off).
-        #[arg(long, default_value_t = LoopOptions::default().slide_steps, allow_negative_numbers = true)]
-        slide_steps: usize,
-        /// A separating saddle below --min-bulge is a neck only if the curve one loop
-        /// radius away is at least this much longer than its loop, on both sides
-        /// (0: a cylinder).
-        #[arg(long, default_value_t = LoopOptions::default().min_opening, allow_negative_numbers = true)]
-        min_opening: f64,
-        /// ... and its loop is at most this many times the circumference of the
-        /// inscribed ball at the saddle (larger: a loop round a flat part).
-        #[arg(long, default_value_t = LoopOptions::default().max_flatness, allow_negative_numbers = true)]
-        max_flatness: f64,
+        neck: NeckArgs,
         /// Write loops.obj, loops.ply, loops.json and critical.ply into this folder.
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -185,6 +148,45 @@ pub enum Command {
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
+    },
+    /// Find the neck loops of many meshes (files, folders searched recursively, @LIST
+    /// files of paths), each in its own worker process with a time and memory limit,
+    /// one JSON line per mesh appended to the runs file; a rerun skips the meshes
+    /// already done.
+    Batch {
+        /// Mesh files, folders, or @LIST (a file of paths, one per line).
+        #[arg(required = true)]
+        inputs: Vec<String>,
+        /// The runs file (JSON lines), appended to and resumed from.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Meshes run at the same time (default: the cores; each worker then gets the
+        /// cores over the jobs as threads).
+        #[arg(long, allow_negative_numbers = true)]
+        jobs: Option<usize>,
+        /// Seconds a mesh may take; a worker over it is stopped and its row says
+        /// `timeout`.
+        #[arg(long, allow_negative_numbers = true)]
+        timeout: Option<f64>,
+        /// Write each mesh's run folder (loops.json, loops.ply, ...) under this folder.
+        #[arg(long)]
+        save_runs: Option<PathBuf>,
+        /// Run again the meshes whose row is not `ok`.
+        #[arg(long)]
+        retry_failed: bool,
+        #[command(flatten)]
+        neck: NeckArgs,
+    },
+    /// One mesh of a batch (run by `batch` in a worker process): prints its row.
+    #[command(hide = true)]
+    BatchWorker {
+        mesh: PathBuf,
+        /// The options, as JSON.
+        #[arg(long)]
+        options: String,
+        /// Write the run's folder here.
+        #[arg(long)]
+        save_run: Option<PathBuf>,
     },
     /// Draw a mesh with loops and saddles from several directions into a PNG.
     Render {
@@ -252,6 +254,78 @@ pub enum Command {
         #[arg(long)]
         list: bool,
     },
+}
+
+/// The method's settings of `loops` and `batch`: which sides, and every stage's.
+#[derive(clap::Args)]
+pub struct NeckArgs {
+    /// Find handle loops (inside).
+    #[arg(long)]
+    pub handles: bool,
+    /// Find tunnel loops (outside).
+    #[arg(long)]
+    pub tunnels: bool,
+    /// Run the two sides one after the other instead of at the same time: slower
+    /// (about 1.25x on 2 cores), with the peak memory of the larger side instead of
+    /// both (the boot: 1.24 GB instead of 1.86 GB).
+    #[arg(long)]
+    pub one_side_at_a_time: bool,
+    /// Simplify a surface with more triangles than this (0: never) for the volume
+    /// mesh, distance field and saddles; the loops are cut again with the same
+    /// planes and tightened on the input.
+    #[arg(long, default_value_t = SimplifyOptions::default().above, value_name = "TRIANGLES")]
+    pub simplify_above: usize,
+    /// How many triangles the simplified copy keeps.
+    #[arg(long, default_value_t = SimplifyOptions::default().target, value_name = "TRIANGLES")]
+    pub simplify_to: usize,
+    #[command(flatten)]
+    pub method: MethodArgs,
+    /// Where the plane through a saddle has no curve around it: parallel planes tried
+    /// on each side, 0.125 % of the diagonal apart.
+    #[arg(long, default_value_t = LoopOptions::default().plane_offsets, allow_negative_numbers = true)]
+    pub plane_offsets: usize,
+    /// A kept cycle-closing loop is also cut from parallel planes up to this many
+    /// steps (0.5 % of the diagonal) away on each side, and the shortest loop of its
+    /// class wins (0: off).
+    #[arg(long, default_value_t = LoopOptions::default().slide_steps, allow_negative_numbers = true)]
+    pub slide_steps: usize,
+    /// A separating saddle below --min-bulge is a neck only if the curve one loop
+    /// radius away is at least this much longer than its loop, on both sides
+    /// (0: a cylinder).
+    #[arg(long, default_value_t = LoopOptions::default().min_opening, allow_negative_numbers = true)]
+    pub min_opening: f64,
+    /// ... and its loop is at most this many times the circumference of the
+    /// inscribed ball at the saddle (larger: a loop round a flat part).
+    #[arg(long, default_value_t = LoopOptions::default().max_flatness, allow_negative_numbers = true)]
+    pub max_flatness: f64,
+}
+
+impl NeckArgs {
+    /// The library's options (`keep_volume`: keep the volume meshes for field.vtu).
+    pub fn options(&self, keep_volume: bool) -> NeckOptions {
+        NeckOptions {
+            loops: LoopOptions {
+                plane_offsets: self.plane_offsets,
+                slide_steps: self.slide_steps,
+                min_opening: self.min_opening,
+                max_flatness: self.max_flatness,
+                ..LoopOptions::default()
+            },
+            // Neither flag: both kinds.
+            handles: self.handles || !self.tunnels,
+            tunnels: self.tunnels || !self.handles,
+            volume: self.method.volume(),
+            morse: self.method.morse(),
+            keep_volume,
+            sides_at_once: !self.one_side_at_a_time,
+            input: self.method.input.options(),
+            simplify: SimplifyOptions {
+                above: self.simplify_above,
+                target: self.simplify_to,
+                ..SimplifyOptions::default()
+            },
+        }
+    }
 }
 
 /// How a mesh file is read into the surface the method works on.

@@ -10,20 +10,20 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Parser;
 use flags::{Cli, Command};
+use necklace::batch::BatchOptions;
 use necklace::error::printable;
 use necklace::file::{check_output_file, check_output_folder};
-use necklace::loops::LoopOptions;
 use necklace::morse::MorseOptions;
 use necklace::output::OutputOptions;
 use necklace::pipeline::{self, InputOptions};
 use necklace::render::RenderOptions;
 use necklace::shapes::Shape;
-use necklace::simplify::SimplifyOptions;
 use necklace::volume::VolumeOptions;
 use necklace::Side;
 use necklace::{io, MeshReport};
 use progress::Bars;
 
+mod batch;
 mod bench;
 mod demo;
 mod flags;
@@ -120,50 +120,49 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
         ),
         Command::Loops {
             mesh,
-            handles,
-            tunnels,
-            one_side_at_a_time,
-            simplify_above,
-            simplify_to,
-            method,
-            plane_offsets,
-            slide_steps,
-            min_opening,
-            max_flatness,
+            neck,
             output,
             png,
             html,
             volume,
             json,
         } => {
-            let options = pipeline::NeckOptions {
-                loops: LoopOptions {
-                    plane_offsets,
-                    slide_steps,
-                    min_opening,
-                    max_flatness,
-                    ..LoopOptions::default()
-                },
-                // Neither flag: both kinds.
-                handles: handles || !tunnels,
-                tunnels: tunnels || !handles,
-                volume: method.volume(),
-                morse: method.morse(),
-                keep_volume: volume,
-                sides_at_once: !one_side_at_a_time,
-                input: method.input.options(),
-                simplify: SimplifyOptions {
-                    above: simplify_above,
-                    target: simplify_to,
-                    ..SimplifyOptions::default()
-                },
-            };
+            let options = neck.options(volume);
             let files = OutputOptions {
                 picture: png.then(RenderOptions::default),
                 volume,
                 html,
             };
             loops(mesh, &options, output.map(|o| (o, files)), json, ui)
+        }
+        Command::Batch {
+            inputs,
+            output,
+            jobs,
+            timeout,
+            save_runs,
+            retry_failed,
+            neck,
+        } => {
+            let options = neck.options(false);
+            let defaults = BatchOptions::default();
+            let batch = BatchOptions {
+                jobs: jobs.unwrap_or(defaults.jobs),
+                timeout,
+                max_memory: Some(neck.method.max_memory),
+                retry_failed,
+                save_runs,
+                ..defaults
+            };
+            batch::run(&inputs, &options, &batch, &output, ui)
+        }
+        Command::BatchWorker {
+            mesh,
+            options,
+            save_run,
+        } => {
+            let row = necklace::batch::work(&mesh, &options, save_run.as_deref());
+            Ok(necklace::batch::row_line(&row)?)
         }
         Command::View { dir, mesh } => view(dir, mesh),
         Command::Segment {

@@ -83,3 +83,20 @@ impl Progress for Bars {
         }
     }
 }
+
+impl Bars {
+    /// A bar over `total` meshes of a batch, with done, failed and the ETA; `None` when
+    /// bars are hidden.
+    pub fn batch(&self, total: u64) -> Option<ProgressBar> {
+        if !self.visible {
+            return None;
+        }
+        let bar = ProgressBar::new(total);
+        bar.set_style(
+            ProgressStyle::with_template("{msg:24} [{bar:30}] {pos}/{len} {elapsed} eta {eta}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        Some(self.lines.add(bar))
+    }
+}

@@ -3,6 +3,12 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use serde_json::Value;
+
+/// `necklace batch`.
+#[path = "cli/batch.rs"]
+mod batch;
+
 /// Careless and hostile input.
 #[path = "cli/hostile.rs"]
 mod hostile;
@@ -12,6 +18,21 @@ fn necklace(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("the binary runs")
+}
+
+/// (kind, length) of every loop of a `loops --json` run.
+fn loops_of(json: &Value) -> Vec<(String, f64)> {
+    json["loops"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| {
+            (
+                l["kind"].as_str().unwrap().to_string(),
+                l["length"].as_f64().unwrap(),
+            )
+        })
+        .collect()
 }
 
 fn temp_dir(name: &str) -> PathBuf {

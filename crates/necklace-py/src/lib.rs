@@ -427,6 +427,110 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(out)
 }
 
+/// `batch_inputs(inputs)`: the mesh files named by files, folders and `@LIST`s
+/// (`necklace::batch::collect_inputs`), sorted.
+#[pyfunction]
+fn batch_inputs(inputs: Vec<String>) -> PyResult<Vec<String>> {
+    let files = guarded(|| necklace::batch::collect_inputs(&inputs))?;
+    Ok(files.iter().map(|p| p.display().to_string()).collect())
+}
+
+/// `batch_options(options)`: the options (a dict of the CLI's option names) as the JSON a
+/// worker is given, and its hash (a row's `options_hash`).
+#[pyfunction]
+fn batch_options(options: &Bound<'_, PyDict>) -> PyResult<(String, String)> {
+    let options = neck_options(options)?;
+    guarded(|| {
+        Ok((
+            necklace::batch::options_json(&options)?,
+            necklace::batch::options_hash(&options)?,
+        ))
+    })
+}
+
+/// `batch_key(path, options_hash)`: a row's key for this file: `(path, sha256,
+/// options_hash, version)` (`sha256` empty when the file cannot be read).
+#[pyfunction]
+fn batch_key(path: PathBuf, options_hash: &str) -> (String, String, String, String) {
+    let (key, _) = necklace::batch::file_key(&path, options_hash);
+    (key.path, key.sha256, key.options_hash, key.version)
+}
+
+/// `batch_supervise(path, options_json, worker, timeout, max_memory, threads, save)`: one
+/// mesh in a worker process (`worker`: the command before the mesh's arguments) under the
+/// limits; its row as a JSON line, or `None` when the worker was interrupted. The GIL is
+/// released while it runs.
+#[pyfunction]
+#[pyo3(signature = (path, options_json, worker, timeout=None, max_memory=None, threads=1, save=None))]
+#[allow(clippy::too_many_arguments)]
+fn batch_supervise(
+    py: Python<'_>,
+    path: PathBuf,
+    options_json: String,
+    worker: Vec<String>,
+    timeout: Option<f64>,
+    max_memory: Option<u64>,
+    threads: usize,
+    save: Option<PathBuf>,
+) -> PyResult<Option<String>> {
+    let Some((program, args)) = worker.split_first() else {
+        return Err(NecklaceError::new_err("the worker command is empty"));
+    };
+    let worker = necklace::batch::Worker {
+        program: PathBuf::from(program),
+        args: args.to_vec(),
+    };
+    let limits = necklace::batch::Limits {
+        timeout,
+        max_memory,
+        threads,
+    };
+    let row = py.detach(|| {
+        necklace::batch::supervise(&path, &options_json, &limits, &worker, save.as_deref())
+    });
+    row.map(|r| guarded(|| necklace::batch::row_line(&r)))
+        .transpose()
+}
+
+/// `batch_work(path, options_json, save=None)`: the worker's body, one mesh in this
+/// process; its row as a JSON line.
+#[pyfunction]
+#[pyo3(signature = (path, options_json, save=None))]
+fn batch_work(
+    py: Python<'_>,
+    path: PathBuf,
+    options_json: String,
+    save: Option<PathBuf>,
+) -> PyResult<String> {
+    let row = py.detach(|| necklace::batch::work(&path, &options_json, save.as_deref()));
+    guarded(|| necklace::batch::row_line(&row))
+}
+
+/// `batch_read_rows(path)`: the rows of a runs file as JSON lines (a last line cut short
+/// is cut off the file).
+#[pyfunction]
+fn batch_read_rows(path: PathBuf) -> PyResult<Vec<String>> {
+    let rows = guarded(|| necklace::batch::read_rows(&path))?;
+    rows.iter()
+        .map(|r| guarded(|| necklace::batch::row_line(r)))
+        .collect()
+}
+
+/// `batch_write_rows(path, rows)`: rows (JSON text each) written to a runs file whole, in
+/// key order, through a rename.
+#[pyfunction]
+fn batch_write_rows(path: PathBuf, rows: Vec<String>) -> PyResult<()> {
+    let mut parsed: Vec<necklace::batch::Row> = rows
+        .iter()
+        .map(|r| {
+            serde_json::from_str(r)
+                .map_err(|e| NecklaceError::new_err(format!("not a batch row: {e}")))
+        })
+        .collect::<PyResult<_>>()?;
+    parsed.sort_by_key(necklace::batch::Row::key);
+    guarded(|| necklace::batch::write_rows(&path, &parsed))
+}
+
 #[pymodule]
 fn _necklace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("NecklaceError", m.py().get_type::<NecklaceError>())?;
@@ -435,5 +539,12 @@ fn _necklace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(find_necks, m)?)?;
     m.add_function(wrap_pyfunction!(load_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(defaults, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_inputs, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_options, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_key, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_supervise, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_work, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_read_rows, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_write_rows, m)?)?;
     Ok(())
 }

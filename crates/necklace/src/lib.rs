@@ -41,6 +41,8 @@
 //!   ([`pipeline::segment_along_loops`]).
 //! - [`pipeline`] composes them; [`output`] writes their results; [`render`] draws
 //!   pictures (not in the paper).
+//! - [`batch`] runs the method over a dataset: a worker process per mesh under a time and
+//!   a memory limit, one resumable JSON row per mesh (`necklace batch`, `necklace.batch`).
 //!
 //! ## Data and services
 //! - [`mesh`]: [`SurfaceMesh`], its topology and validity report ([`MeshReport`]).
@@ -55,6 +57,7 @@
 //! [`Result`] with the one [`Error`] type, whose message is a single line naming the file
 //! and the line or byte where the problem is. Results do not depend on the thread count.
 
+pub mod batch;
 pub mod distance;
 pub mod error;
 pub mod file;

@@ -7,7 +7,7 @@ use std::process::{Command, Output};
 
 use serde_json::Value;
 
-use super::necklace;
+use super::{loops_of, necklace};
 
 fn temp_dir(name: &str) -> PathBuf {
     super::temp_dir(&format!("hostile-{name}"))
@@ -104,21 +104,6 @@ fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
     path
-}
-
-/// (kind, length) of every loop of a `loops --json` run.
-fn loops_of(json: &Value) -> Vec<(String, f64)> {
-    json["loops"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|l| {
-            (
-                l["kind"].as_str().unwrap().to_string(),
-                l["length"].as_f64().unwrap(),
-            )
-        })
-        .collect()
 }
 
 fn count(loops: &[(String, f64)], kind: &str) -> usize {

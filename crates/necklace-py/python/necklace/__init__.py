@@ -26,9 +26,11 @@ import numpy as np
 from ._necklace import JSON_VERSION, NecklaceError, __version__
 from ._necklace import find_necks as _find_necks
 from ._necklace import load_mesh as _load_mesh
+from ._batch import batch
 
 __all__ = [
     "find_necks",
+    "batch",
     "load_mesh",
     "NecklaceError",
     "NeckResult",

@@ -26,3 +26,33 @@ def load_mesh(path: str) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]
 
 def defaults() -> Dict[str, Any]:
     """The library's default of every option of ``find_necks``."""
+
+def batch_inputs(inputs: List[str]) -> List[str]:
+    """The mesh files named by files, folders and ``@LIST`` files, sorted."""
+
+def batch_options(options: Dict[str, Any]) -> Tuple[str, str]:
+    """The options as the JSON a worker is given, and its hash."""
+
+def batch_key(path: str, options_hash: str) -> Tuple[str, str, str, str]:
+    """A row's key for this file: ``(path, sha256, options_hash, version)``."""
+
+def batch_supervise(
+    path: str,
+    options_json: str,
+    worker: List[str],
+    timeout: Optional[float] = None,
+    max_memory: Optional[int] = None,
+    threads: int = 1,
+    save: Optional[str] = None,
+) -> Optional[str]:
+    """One mesh in a worker process under the limits: its row as a JSON line, or
+    ``None`` when the worker was interrupted."""
+
+def batch_work(path: str, options_json: str, save: Optional[str] = None) -> str:
+    """One mesh in this process: its row as a JSON line."""
+
+def batch_read_rows(path: str) -> List[str]:
+    """The rows of a runs file as JSON lines (a last line cut short is cut off)."""
+
+def batch_write_rows(path: str, rows: List[str]) -> None:
+    """Rows written to a runs file whole, in key order, through a rename."""

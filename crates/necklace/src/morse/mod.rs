@@ -111,7 +111,7 @@ pub enum Schedule {
 }
 
 /// Options of [`analyze`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MorseOptions {
     /// Which heat times to classify at (default [`Schedule::ScaleSpace`]).
     pub schedule: Schedule,

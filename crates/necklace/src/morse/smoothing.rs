@@ -35,7 +35,7 @@ pub enum Preconditioner {
 }
 
 /// Stopping rule and warm start of the conjugate-gradient solve.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SolverOptions {
     /// Relative residual `|r| / |b|` at which to stop (default 1e-10).
     pub tolerance: f64,

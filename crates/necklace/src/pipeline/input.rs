@@ -46,7 +46,7 @@ use crate::tet::{TetMesh, VertexKind};
 pub const DEFAULT_WELD: f64 = 1e-8;
 
 /// Options of the input step ([`prepare_input_with`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InputOptions {
     /// Weld corners closer than this fraction of the bounding-box diagonal into one
     /// vertex (default [`DEFAULT_WELD`]; `Some(0.0)` welds only equal positions; `None`

@@ -87,7 +87,7 @@ pub fn distance_field(distance: &SurfaceDistance, mesh: &TetMesh) -> Vec<f64> {
 }
 
 /// Options of [`find_necks`]: which sides, and each stage's options.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NeckOptions {
     /// Look for handles (inside). Default true.
     pub handles: bool,

@@ -69,7 +69,7 @@ pub enum Mesher {
 }
 
 /// Options of [`volume_mesh`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct VolumeOptions {
     /// The mesher (default [`Mesher::Stuffing`]).
     pub mesher: Mesher,
