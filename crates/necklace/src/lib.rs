@@ -39,6 +39,8 @@
 //! - [`segment`] (after the method; sec. 1 names it as the loops' use): cut the surface
 //!   along loops into parts, with their areas, volumes and topology
 //!   ([`pipeline::segment_along_loops`]).
+//! - [`surgery`] (after the method, in progress): removing handles and tunnels along
+//!   their loops; so far the caps that close a cut ([`surgery::cap`]).
 //! - [`pipeline`] composes them; [`output`] writes their results; [`render`] draws
 //!   pictures (not in the paper).
 //! - [`batch`] runs the method over a dataset: a worker process per mesh under a time and
@@ -73,6 +75,7 @@ pub mod render;
 pub mod segment;
 pub mod shapes;
 pub mod simplify;
+pub mod surgery;
 pub mod tet;
 pub mod volume;
 

@@ -58,6 +58,9 @@ pub enum ShapeKind {
     /// A ring whose core curve rises and falls like a saddle, (R cos t, R sin t,
     /// bend · cos 2t): genus 1, and no plane through the hole's saddle closes around it.
     BentRing,
+    /// A body ball carrying small rings half buried in it, like a mug's handles: genus
+    /// `count`, each ring one handle and one tunnel.
+    Rings,
 }
 
 /// A named numeric parameter of a shape, with its default and allowed range.
@@ -135,14 +138,16 @@ const CAPSULE: &[ParamSpec] = &[
     real("r", 0.4, 1e-6, 1e6, "radius"),
     whole("res", 64.0, 4.0, 1000.0, RES_DOC),
 ];
+/// The body ball's radius, of the shapes built on one.
+const BODY: ParamSpec = real(
+    "body",
+    1.0,
+    1e-6,
+    1e6,
+    "radius of the body ball, centred at the origin",
+);
 const LIMB: &[ParamSpec] = &[
-    real(
-        "body",
-        1.0,
-        1e-6,
-        1e6,
-        "radius of the body ball, centred at the origin",
-    ),
+    BODY,
     real(
         "base",
         0.5,
@@ -175,13 +180,7 @@ const SATELLITES: &[ParamSpec] = &[
         12.0,
         "number of satellites, evenly around the z axis in the xy-plane",
     ),
-    real(
-        "body",
-        1.0,
-        1e-6,
-        1e6,
-        "radius of the body ball, centred at the origin",
-    ),
+    BODY,
     real(
         "satellite",
         0.45,
@@ -255,6 +254,32 @@ const BENT_RING: &[ParamSpec] = &[
         "height of the core curve's rise and fall: z = bend · cos 2t",
     ),
     whole("res", 72.0, 4.0, 1000.0, RES_DOC),
+];
+const RINGS: &[ParamSpec] = &[
+    whole(
+        "count",
+        4.0,
+        1.0,
+        20.0,
+        "number of rings, spread evenly over the ball (a Fibonacci sphere)",
+    ),
+    BODY,
+    real(
+        "ring",
+        0.4,
+        1e-6,
+        1e6,
+        "radius of each ring's core circle, centred on the ball's surface (< body)",
+    ),
+    real(
+        "wire",
+        0.12,
+        1e-6,
+        1e6,
+        "tube radius of the rings (< ring / 2)",
+    ),
+    real("blend", 0.08, 0.0, 1e6, BLEND_DOC),
+    whole("res", 64.0, 4.0, 1000.0, RES_DOC),
 ];
 /// Angle of the first satellite from +x, in radians. Off the lattice axes so that no
 /// neck cylinder runs along a lattice direction, where marching tetrahedra's projected
@@ -352,7 +377,7 @@ const PRETZEL: &[ParamSpec] = &[
 
 impl ShapeKind {
     /// Every shape, in documentation order.
-    pub const ALL: [ShapeKind; 13] = [
+    pub const ALL: [ShapeKind; 14] = [
         ShapeKind::Sphere,
         ShapeKind::Ellipsoid,
         ShapeKind::Capsule,
@@ -366,6 +391,7 @@ impl ShapeKind {
         ShapeKind::Satellites,
         ShapeKind::Buckyball,
         ShapeKind::BentRing,
+        ShapeKind::Rings,
     ];
 
     /// The name used on the command line.
@@ -384,6 +410,7 @@ impl ShapeKind {
             ShapeKind::Satellites => "satellites",
             ShapeKind::Buckyball => "buckyball",
             ShapeKind::BentRing => "bent-ring",
+            ShapeKind::Rings => "rings",
         }
     }
 
@@ -417,6 +444,7 @@ impl ShapeKind {
             ShapeKind::Satellites => SATELLITES,
             ShapeKind::Buckyball => BUCKYBALL,
             ShapeKind::BentRing => BENT_RING,
+            ShapeKind::Rings => RINGS,
         }
     }
 
@@ -466,6 +494,12 @@ impl ShapeKind {
                 "balls on the 60 vertices and sticks on the 90 edges of a truncated \
                  icosahedron; genus 31; 90 handles (one per stick, length 2π stick) and 32 \
                  tunnels (one per pentagon or hexagon window)"
+            }
+            ShapeKind::Rings => {
+                "body ball with count rings of core radius ring and tube radius wire, each \
+                 centred on the ball's surface with the outward direction in its plane, so that \
+                 half of it stands out as an arch; genus count; per ring one handle (a meridian \
+                 of the wire, length 2π wire) and one tunnel (through the arch)"
             }
             ShapeKind::BentRing => {
                 "tube of radius r around the curve (R cos t, R sin t, bend cos 2t); genus 1; one \
@@ -625,6 +659,22 @@ impl Shape {
                     p("distance")
                 ))
             }
+            ShapeKind::Rings if !(p("ring") < p("body") && 2.0 * p("wire") < p("ring")) => {
+                fail(format!(
+                    "need 2 wire = {} < ring = {} < body = {}",
+                    2.0 * p("wire"),
+                    p("ring"),
+                    p("body")
+                ))
+            }
+            ShapeKind::Rings if self.ring_separation() <= 2.0 * (p("ring") + p("wire") + p("blend")) => {
+                fail(format!(
+                    "{} rings of radius {} touch on a ball of radius {}",
+                    p("count"),
+                    p("ring") + p("wire"),
+                    p("body")
+                ))
+            }
             ShapeKind::Buckyball if !(p("stick") < p("ball") && p("ball") < 0.5 * p("edge")) => {
                 fail(format!(
                     "need stick = {} < ball = {} < edge/2 = {}",
@@ -685,6 +735,7 @@ impl Shape {
             | ShapeKind::Satellites => 0,
             ShapeKind::Buckyball => 31,
             ShapeKind::Torus | ShapeKind::VaryingTorus | ShapeKind::BentRing => 1,
+            ShapeKind::Rings => self.param("count") as usize,
             ShapeKind::Eight => 2,
             ShapeKind::Pretzel => self.param("g") as usize,
         }
@@ -739,6 +790,45 @@ impl Shape {
                 [a.cos(), a.sin(), 0.0]
             })
             .collect()
+    }
+
+    /// The rings' frames: the unit direction of each ring's centre from the origin (a
+    /// Fibonacci sphere) and the unit axis of its circle (perpendicular to it).
+    fn ring_frames(&self) -> Vec<([f64; 3], [f64; 3])> {
+        let n = self.param("count") as usize;
+        let golden = PI * (3.0 - 5f64.sqrt());
+        (0..n)
+            .map(|i| {
+                let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = golden * i as f64 + SATELLITE_START;
+                let d = [r * phi.cos(), r * phi.sin(), z];
+                let other = if z.abs() > 0.9 {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    [0.0, 0.0, 1.0]
+                };
+                let a = [
+                    d[1] * other[2] - d[2] * other[1],
+                    d[2] * other[0] - d[0] * other[2],
+                    d[0] * other[1] - d[1] * other[0],
+                ];
+                (d, scale3(a, 1.0 / dist3(a, [0.0; 3])))
+            })
+            .collect()
+    }
+
+    /// The shortest distance between two ring centres (infinite for one ring).
+    fn ring_separation(&self) -> f64 {
+        let body = self.param("body");
+        let frames = self.ring_frames();
+        let mut least = f64::INFINITY;
+        for (i, (a, _)) in frames.iter().enumerate() {
+            for (b, _) in &frames[i + 1..] {
+                least = least.min(body * dist3(*a, *b));
+            }
+        }
+        least
     }
 
     /// The signed distance function (negative inside).
@@ -815,6 +905,28 @@ impl Shape {
                 let r = self.param("r");
                 sdf::torus(p, o, self.param("R"), |_| r)
             }
+            ShapeKind::Rings => {
+                let (body, ring, wire) =
+                    (self.param("body"), self.param("ring"), self.param("wire"));
+                let mut d = sdf::ball(p, o, body);
+                for (dir, axis) in self.ring_frames() {
+                    // The ring's frame: x along the outward direction, z along its axis.
+                    let q = [0, 1, 2].map(|k| p[k] - body * dir[k]);
+                    let y = [
+                        axis[1] * dir[2] - axis[2] * dir[1],
+                        axis[2] * dir[0] - axis[0] * dir[2],
+                        axis[0] * dir[1] - axis[1] * dir[0],
+                    ];
+                    let dot = |u: [f64; 3]| u[0] * q[0] + u[1] * q[1] + u[2] * q[2];
+                    let local = [dot(dir), dot(y), dot(axis)];
+                    d = sdf::smooth_union(
+                        d,
+                        sdf::torus(local, o, ring, |_| wire),
+                        self.param("blend"),
+                    );
+                }
+                d
+            }
             ShapeKind::BentRing => {
                 let (big_r, bend) = (self.param("R"), self.param("bend"));
                 let core = |t: f64| [big_r * t.cos(), big_r * t.sin(), bend * (2.0 * t).cos()];
@@ -888,6 +1000,7 @@ impl Shape {
                 let (big_r, r) = (self.param("R"), self.param("r"));
                 [big_r + r, big_r + r, self.param("bend").abs() + r]
             }
+            ShapeKind::Rings => [self.param("body") + self.param("ring") + self.param("wire"); 3],
             ShapeKind::Dumbbell | ShapeKind::Chain => {
                 let radius = self.param("radius");
                 let last = self.ball_centres().last().map_or(0.0, |c| c[0]);
@@ -972,6 +1085,24 @@ impl Shape {
                         "the inner equator is the shortest loop around the hole",
                     ),
                 ]
+            }
+            ShapeKind::Rings => {
+                let (body, ring, wire) =
+                    (self.param("body"), self.param("ring"), self.param("wire"));
+                let mut necks = Vec::new();
+                for (dir, _) in self.ring_frames() {
+                    necks.push(handle(
+                        Some(2.0 * PI * wire),
+                        None,
+                        "a meridian circle of the ring's uniform wire: position degenerate",
+                    ));
+                    necks.push(tunnel(
+                        None,
+                        Some(scale3(dir, body + 0.5 * (ring - wire))),
+                        "through the arch, between the ring and the ball; no closed form",
+                    ));
+                }
+                necks
             }
             ShapeKind::BentRing => vec![
                 handle(

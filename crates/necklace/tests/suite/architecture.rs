@@ -19,7 +19,7 @@ const SERVICES: &[&str] = &["distance"];
 /// Modules that may import everything; no other module imports them.
 const COMPOSERS: &[&str] = &["pipeline", "output", "batch"];
 const STAGES: &[&str] = &[
-    "io", "shapes", "simplify", "volume", "morse", "loops", "segment", "render",
+    "io", "shapes", "simplify", "volume", "morse", "loops", "segment", "surgery", "render",
 ];
 
 /// Third-party crates and the modules that may name them, with their submodules

@@ -181,3 +181,60 @@ fn bad_parameters_are_rejected_with_a_message() {
         assert!(err.to_string().contains(needle), "{name}: {err}");
     }
 }
+
+#[test]
+fn a_ball_with_rings_has_a_handle_round_each_wire_and_a_tunnel_through_each_arch() {
+    let shape = Shape::new(ShapeKind::Rings);
+    let (count, wire) = (shape.param("count") as usize, shape.param("wire"));
+    // Three resolutions, none crossing itself where the rings meet the ball.
+    for res in [32.0, 48.0, 64.0] {
+        let mesh = shape.clone().with("res", res).unwrap().mesh().unwrap();
+        let crossings =
+            necklace::distance::SurfaceDistance::new(&mesh).self_intersections(&mesh.triangles);
+        assert!(
+            crossings.is_empty(),
+            "res {res}: {} crossings",
+            crossings.len()
+        );
+    }
+    let mesh = shape.mesh().unwrap();
+    let report = necklace::find_necks(&mesh, &necklace::Options::default()).unwrap();
+    let lengths = |side: Side| -> Vec<f64> {
+        report
+            .loops
+            .iter()
+            .filter(|l| l.kind == side)
+            .map(|l| l.length)
+            .collect()
+    };
+    let handles = lengths(Side::Inside);
+    assert_eq!(handles.len(), count, "{handles:?}");
+    // The marching mesh's wire is a polygon inside the round one: a few % shorter.
+    for l in &handles {
+        assert!((l / (2.0 * PI * wire) - 0.98).abs() < 0.03, "{l}");
+    }
+    assert_eq!(lengths(Side::Outside).len(), count);
+    // Each tunnel loop passes through an arch: its centre is near the one expected.
+    let arches: Vec<[f64; 3]> = shape
+        .expected_necks()
+        .iter()
+        .filter(|n| n.kind == Side::Outside)
+        .filter_map(|n| n.center)
+        .collect();
+    for l in report.loops.iter().filter(|l| l.kind == Side::Outside) {
+        let nearest = arches
+            .iter()
+            .map(|c| {
+                (0..3)
+                    .map(|k| (c[k] - l.center[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            nearest < shape.param("ring"),
+            "{:?} is {nearest} from an arch",
+            l.center
+        );
+    }
+}

@@ -1,0 +1,19 @@
+//! Surgery on a closed surface along its neck loops: removing a handle by cutting the
+//! solid through its neck, or a tunnel by plugging the hole (issue 41; the paper's
+//! sec. 1 names topology repair among the loops' uses). **In progress**: this module
+//! holds the caps so far; the band cut along a loop, the checks and the choice of loops
+//! follow (`docs/design-repair.md`).
+//!
+//! - [`cap`]: the disk that closes a boundary left by a cut: concentric rings from the
+//!   boundary to a centre, about the local edge length apart, placed on the cone from a
+//!   point (the neck's saddle, as the plane-built membrane is) and then faired with the
+//!   boundary fixed: a harmonic solve, then minimal-area steps.
+//!
+//! Conventions: lengths in the surface's units; a cap's triangles run along its boundary
+//! in the order given (the directed edge `b[i] → b[i + 1]` is in the disk), so the
+//! caller orients it by the order it passes. Sequential per cap (the caps of one round
+//! are independent items).
+
+mod cap;
+
+pub use cap::{cap, Cap, CapOptions};
