@@ -1,9 +1,12 @@
 //! Surgery on a closed surface along its neck loops: removing a handle by cutting the
 //! solid through its neck, or a tunnel by plugging the hole (issue 41; the paper's
 //! sec. 1 names topology repair among the loops' uses). **In progress**: this module
-//! holds the caps so far; the band cut along a loop, the checks and the choice of loops
+//! holds the band's curves and the caps so far; the band cut along a loop, the checks and the choice of loops
 //! follow (`docs/design-repair.md`).
 //!
+//! - [`offset_curves`]: the two curves at signed distance ±δ from a loop, through the
+//!   surface, that bound the band a cut removes (marching triangles over the signed
+//!   distance to the loop, on the faces reached from it).
 //! - [`cap`]: the disk that closes a boundary left by a cut: concentric rings from the
 //!   boundary to a centre, about the local edge length apart, placed on the cone from a
 //!   point (the neck's saddle, as the plane-built membrane is) and then faired with the
@@ -14,6 +17,8 @@
 //! caller orients it by the order it passes. Sequential per cap (the caps of one round
 //! are independent items).
 
+mod band;
 mod cap;
 
+pub use band::{offset_curves, Offsets, OnSurface};
 pub use cap::{cap, Cap, CapOptions};

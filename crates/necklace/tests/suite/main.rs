@@ -18,6 +18,7 @@ mod segment;
 mod shapes;
 mod shared_meshes;
 mod simplify;
+mod surgery;
 mod tet_io;
 mod tetgen;
 mod volume;
