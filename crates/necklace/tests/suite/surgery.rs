@@ -83,3 +83,35 @@ fn the_torus_handle_loop_has_meridians_on_either_side_and_their_caps_are_its_dis
         assert!(disk.area <= disk.cone_area);
     }
 }
+
+#[test]
+fn cutting_the_torus_through_its_handle_or_plugging_its_hole_leaves_a_valid_ball() {
+    let shape = Shape::new(ShapeKind::Torus);
+    let report =
+        necklace::find_necks(&shape.mesh().unwrap(), &necklace::Options::default()).unwrap();
+    let surface = &report.surface;
+    let volume = surface.signed_volume();
+    for side in [Side::Inside, Side::Outside] {
+        let neck = report.loops.iter().find(|l| l.kind == side).unwrap();
+        let cut = necklace::pipeline::cut_along_loop(surface, neck, 0.05).unwrap();
+        let r = necklace::MeshReport::new(&cut.mesh);
+        assert!(r.is_valid_solid(), "{side:?}: {:?}", r.problems());
+        assert_eq!(r.genus, vec![Some(0)], "{side:?}");
+        assert_eq!(r.outward, Some(true), "{side:?}");
+        let crossings = necklace::distance::SurfaceDistance::new(&cut.mesh)
+            .self_intersections(&cut.mesh.triangles);
+        assert!(
+            crossings.is_empty(),
+            "{side:?}: {} crossings",
+            crossings.len()
+        );
+        match side {
+            // The band is 2δ of the tube: about δ/(πR) of the volume.
+            Side::Inside => {
+                assert!(cut.volume_change < 0.0);
+                assert!(-cut.volume_change / volume < 0.02, "{}", cut.volume_change);
+            }
+            Side::Outside => assert!(cut.volume_change > 0.0, "{}", cut.volume_change),
+        }
+    }
+}
