@@ -30,14 +30,7 @@ pub struct Cut {
 pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Result<Cut> {
     // 1. The band's two curves.
     let topology = Topology::new(surface);
-    let curve: Vec<OnSurface> = neck
-        .surface_points
-        .iter()
-        .map(|p| match *p {
-            SurfacePoint::Vertex { vertex } => OnSurface::Vertex(vertex),
-            SurfacePoint::Edge { edge, t } => OnSurface::Edge { edge, t },
-        })
-        .collect();
+    let curve = loop_on_surface(neck);
     let delta = band * neck.radius;
     let offsets = offset_curves(surface, &topology, &curve, delta)?;
 
@@ -124,6 +117,17 @@ pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Resu
         cap_areas,
         volume_change,
     })
+}
+
+/// A loop's points on its surface, as the `surgery` stage takes them.
+pub fn loop_on_surface(neck: &NeckLoop) -> Vec<OnSurface> {
+    neck.surface_points
+        .iter()
+        .map(|p| match *p {
+            SurfacePoint::Vertex { vertex } => OnSurface::Vertex(vertex),
+            SurfacePoint::Edge { edge, t } => OnSurface::Edge { edge, t },
+        })
+        .collect()
 }
 
 fn centroid(points: &[[f64; 3]]) -> [f64; 3] {

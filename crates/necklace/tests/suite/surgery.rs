@@ -3,10 +3,9 @@
 
 use std::f64::consts::PI;
 
-use necklace::loops::SurfacePoint;
 use necklace::mesh::Topology;
 use necklace::shapes::{Shape, ShapeKind};
-use necklace::surgery::{cap, offset_curves, CapOptions, OnSurface};
+use necklace::surgery::{cap, offset_curves, CapOptions};
 use necklace::Side;
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -41,14 +40,7 @@ fn the_torus_handle_loop_has_meridians_on_either_side_and_their_caps_are_its_dis
         .iter()
         .find(|l| l.kind == Side::Inside)
         .unwrap();
-    let curve: Vec<OnSurface> = handle
-        .surface_points
-        .iter()
-        .map(|p| match *p {
-            SurfacePoint::Vertex { vertex } => OnSurface::Vertex(vertex),
-            SurfacePoint::Edge { edge, t } => OnSurface::Edge { edge, t },
-        })
-        .collect();
+    let curve = necklace::pipeline::loop_on_surface(handle);
     let delta = 0.1 * handle.radius;
     let offsets = offset_curves(surface, &Topology::new(surface), &curve, delta).unwrap();
     let loop_points = &handle.points;
