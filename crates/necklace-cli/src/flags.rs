@@ -188,6 +188,35 @@ pub enum Command {
         #[arg(long)]
         save_run: Option<PathBuf>,
     },
+    /// Remove handles and tunnels along their neck loops (issue 41, first version):
+    /// a handle is cut through along a thin band round its loop, a tunnel's hole plugged,
+    /// each opening closed by faired caps; loops shortest first, each operation checked
+    /// (a valid solid, the genus one lower, no crossings) or skipped with its reason.
+    Repair {
+        /// The closed surface mesh.
+        mesh: PathBuf,
+        /// The repaired surface (.obj, .off or .ply).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Remove classes until the surface has this genus (default 0).
+        #[arg(long, conflicts_with = "max_length", allow_negative_numbers = true)]
+        genus: Option<usize>,
+        /// Remove every loop shorter than this instead (noise), whatever genus results.
+        #[arg(long, allow_negative_numbers = true)]
+        max_length: Option<f64>,
+        /// Only cut handles, or only plug tunnels.
+        #[arg(long, value_enum)]
+        only: Option<OnlyArg>,
+        /// Each side of the band a cut removes lies this fraction of the loop's radius
+        /// from it.
+        #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
+        band: f64,
+        #[command(flatten)]
+        method: MethodArgs,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Draw a mesh with loops and saddles from several directions into a PNG.
     Render {
         /// The surface mesh.
@@ -427,6 +456,12 @@ impl MethodArgs {
             ..MorseOptions::default()
         }
     }
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum OnlyArg {
+    Handles,
+    Tunnels,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]

@@ -164,6 +164,36 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             let row = necklace::batch::work(&mesh, &options, save_run.as_deref());
             Ok(necklace::batch::row_line(&row)?)
         }
+        Command::Repair {
+            mesh,
+            output,
+            genus,
+            max_length,
+            only,
+            band,
+            method,
+            json,
+        } => {
+            let options = pipeline::RepairOptions {
+                target: match max_length {
+                    Some(l) => pipeline::RepairTarget::MaxLength(l),
+                    None => pipeline::RepairTarget::Genus(genus.unwrap_or(0)),
+                },
+                only: only.map(|o| match o {
+                    flags::OnlyArg::Handles => Side::Inside,
+                    flags::OnlyArg::Tunnels => Side::Outside,
+                }),
+                band,
+                necks: pipeline::NeckOptions {
+                    volume: method.volume(),
+                    morse: method.morse(),
+                    input: method.input.options(),
+                    ..pipeline::NeckOptions::default()
+                },
+                ..pipeline::RepairOptions::default()
+            };
+            repair(mesh, &options, output, json)
+        }
         Command::View { dir, mesh } => view(dir, mesh),
         Command::Segment {
             mesh,
@@ -313,6 +343,24 @@ fn loops(
         return Ok(serde_json::to_string_pretty(&value)? + "\n");
     }
     print::loops_text(&path, &report, &written)
+}
+
+fn repair(
+    path: PathBuf,
+    options: &pipeline::RepairOptions,
+    output: PathBuf,
+    json: bool,
+) -> Result<String> {
+    io::check_mesh_name(&output)?;
+    check_output_file(&output)?;
+    let surface = io::read_mesh(&path)?;
+    let (repaired, report) = pipeline::repair(&surface, options).map_err(|e| e.in_file(&path))?;
+    print::warn(&report.warnings);
+    io::write_mesh(&output, &repaired)?;
+    if json {
+        return Ok(serde_json::to_string_pretty(&report)? + "\n");
+    }
+    Ok(print::repair_text(&path, &report, &output))
 }
 
 fn view(dir: PathBuf, mesh: Option<PathBuf>) -> Result<String> {

@@ -375,3 +375,48 @@ fn significant(x: f64) -> String {
         format!("{x:.5e}")
     }
 }
+
+/// `necklace repair`'s text: the genus before and after, one line per operation, the
+/// loops skipped with their reasons.
+pub fn repair_text(
+    path: &Path,
+    report: &necklace::pipeline::RepairReport,
+    output: &Path,
+) -> String {
+    // What an operation on each kind is, and the kind's name.
+    let names = |kind: necklace::Side| match kind {
+        necklace::Side::Inside => ("handle cut", "handle"),
+        necklace::Side::Outside => ("tunnel plugged", "tunnel"),
+    };
+    let mut text = format!(
+        "{}: genus {} -> {} in {} operations ({} loop runs, {:.1} s), Hausdorff {:.4e} -> {}\n",
+        path.display(),
+        report.genus[0],
+        report.genus[1],
+        report.operations.len(),
+        report.loop_runs,
+        report.seconds,
+        report.hausdorff,
+        output.display()
+    );
+    for op in &report.operations {
+        let _ = writeln!(
+            text,
+            "  {:14} loop length {:.4e}  caps {:.4e}  volume {:+.4e}",
+            names(op.neck.kind).0,
+            op.neck.loop_length,
+            op.cap_area,
+            op.volume_change
+        );
+    }
+    for skip in &report.skipped {
+        let _ = writeln!(
+            text,
+            "  skipped {} loop of length {:.4e}: {}",
+            names(skip.neck.kind).1,
+            skip.neck.loop_length,
+            skip.reason
+        );
+    }
+    text
+}

@@ -40,7 +40,8 @@
 //!   along loops into parts, with their areas, volumes and topology
 //!   ([`pipeline::segment_along_loops`]).
 //! - [`surgery`] (after the method, in progress): removing handles and tunnels along
-//!   their loops; so far the caps that close a cut ([`surgery::cap`]).
+//!   their loops: the band's curves round a loop and the caps that close a cut;
+//!   [`pipeline::repair`] (`necklace repair`) composes them with `segment`.
 //! - [`pipeline`] composes them; [`output`] writes their results; [`render`] draws
 //!   pictures (not in the paper).
 //! - [`batch`] runs the method over a dataset: a worker process per mesh under a time and

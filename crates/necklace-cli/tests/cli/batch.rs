@@ -348,3 +348,36 @@ fn batch_refuses_bad_arguments_with_status_2() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn repair_writes_a_genus_0_surface_and_refuses_bad_targets_in_one_line() {
+    let dir = temp_dir("repair");
+    let meshes = shapes(&dir);
+    let out = dir.join("repaired.obj");
+    let run = necklace(&["repair", s(&meshes[0]), "-o", s(&out), "--json", "-q"]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(report["genus"], serde_json::json!([1, 0]));
+    let info = necklace(&["info", s(&out), "--json"]);
+    let info: Value = serde_json::from_slice(&info.stdout).unwrap();
+    assert_eq!(info["genus"], serde_json::json!([0]));
+    assert_eq!(info["watertight"], serde_json::json!(true));
+    for args in [
+        vec!["--genus", "3"],
+        vec!["--genus", "0", "--max-length", "1"],
+        vec!["--max-length", "-1"],
+    ] {
+        let run = necklace(&[&["repair", s(&meshes[0]), "-o", s(&out), "-q"], &args[..]].concat());
+        assert_eq!(run.status.code(), Some(2), "{args:?}");
+        assert_eq!(
+            String::from_utf8_lossy(&run.stderr).lines().count(),
+            1,
+            "{args:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -64,7 +64,10 @@ pub use input::{
     inspect_surface, load_surface, meshed_boundary, prepare_input, prepare_input_with,
     prepare_surface, weld_input, InputOptions, PreparedSurface, WeldedInput, DEFAULT_WELD,
 };
-pub use repairing::{cut_along_loop, loop_on_surface, Cut};
+pub use repairing::{
+    cut_along_loop, loop_on_surface, repair, Cut, RepairLoop, RepairOperation, RepairOptions,
+    RepairReport, RepairSkip, RepairTarget,
+};
 use report::SideRun;
 pub use report::{
     tracked_points, HomologyCheck, MorseCheck, NeckReport, NeckTimings, SideReport, SimplifyReport,

@@ -1,13 +1,36 @@
-//! One operation of the repair (issue 41, in progress; `docs/design-repair.md`): the
-//! surface cut along a band round one neck loop and the two boundaries closed by caps,
-//! which removes the loop's class. A handle loop's caps span the neck inside the solid
-//! (the solid is cut through); a tunnel loop's span the hole outside it (the hole is
-//! plugged). The choice of loops, the checks and `necklace repair` follow.
+//! Repair: handles and tunnels removed along their neck loops (issue 41, in progress;
+//! `docs/design-repair.md`).
+//!
+//! One operation ([`cut_along_loop`]) cuts the surface along a band round one neck loop
+//! and closes the two boundaries with caps, which removes the loop's class. A handle
+//! loop's caps span the neck inside the solid (the solid is cut through); a tunnel
+//! loop's span the hole outside it (the hole is plugged).
+//!
+//! [`repair`] reads as the recipe:
+//! 1. `find_necks` on the input; refuse what cannot be repaired (open, crossing itself,
+//!    a target genus above the surface's).
+//! 2. The candidates: the loops of the kinds asked for (and, with a length bound, the
+//!    shorter ones), shortest first (a cap's area grows with its loop's length squared,
+//!    so this is cheapest first).
+//! 3. One at a time: the operation, then its checks — a valid closed solid, the same
+//!    components, the genus one lower (a class that depends on removed ones would cut
+//!    a part off or enclose a cavity), no crossings. A failed check skips the loop with
+//!    its reason; a kept one replaces the surface, and the other candidates are carried
+//!    onto it where the cut left their edges alone.
+//! 4. Loops the cuts disturbed wait for the next `find_necks` run, at most
+//!    `max_loop_runs` in all.
 
+use std::collections::HashSet;
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use super::NeckOptions;
+use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, scale, sub};
 use crate::loops::{NeckLoop, SurfacePoint};
-use crate::mesh::{remove_unreferenced, SurfaceMesh, Topology};
+use crate::mesh::{remove_unreferenced, MeshReport, Side, SurfaceMesh, Topology};
 use crate::segment::{segment, CurvePoint};
 use crate::surgery::{cap, offset_curves, CapOptions, OnSurface};
 
@@ -22,6 +45,9 @@ pub struct Cut {
     pub cap_areas: [f64; 2],
     /// The enclosed volume's change (negative for a cut, positive for a plug).
     pub volume_change: f64,
+    /// For each vertex of the surface cut, its index in `mesh` (`u32::MAX`: removed with
+    /// the band).
+    pub vertex_map: Vec<u32>,
 }
 
 /// Remove the class of `neck` (found on `surface`): the band between the curves at
@@ -106,16 +132,24 @@ pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Resu
             })
         }));
     }
-    let (mesh, _) = remove_unreferenced(&SurfaceMesh {
+    let (mesh, kept) = remove_unreferenced(&SurfaceMesh {
         positions,
         triangles,
     });
+    // The refined surface keeps the input's vertices first, with their indices.
+    let mut vertex_map = vec![u32::MAX; surface.positions.len()];
+    for (new, &old) in kept.iter().enumerate() {
+        if let Some(slot) = vertex_map.get_mut(old as usize) {
+            *slot = new as u32;
+        }
+    }
     let volume_change = mesh.signed_volume() - surface.signed_volume();
     Ok(Cut {
         mesh,
         delta,
         cap_areas,
         volume_change,
+        vertex_map,
     })
 }
 
@@ -179,4 +213,365 @@ fn boundary_cycles(triangles: &[[u32; 3]]) -> Result<Vec<Vec<u32>>> {
         cycles.push(cycle);
     }
     Ok(cycles)
+}
+
+/// What [`repair`] removes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RepairTarget {
+    /// Classes until the surface has this genus (default 0), cheapest first.
+    Genus(usize),
+    /// Every loop shorter than this, whatever genus results (topological noise).
+    MaxLength(f64),
+}
+
+/// Options of [`repair`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RepairOptions {
+    /// What to remove (default genus 0).
+    pub target: RepairTarget,
+    /// Only handles (`Inside`: cuts) or only tunnels (`Outside`: plugs); default both.
+    pub only: Option<Side>,
+    /// Each side of the band a cut removes lies this fraction of the loop's radius from
+    /// it (default 0.05).
+    pub band: f64,
+    /// The loops' options.
+    pub necks: NeckOptions,
+    /// Most `find_necks` runs (default 4): loops a cut disturbed are found again by the
+    /// next run.
+    pub max_loop_runs: usize,
+}
+
+impl Default for RepairOptions {
+    fn default() -> Self {
+        RepairOptions {
+            target: RepairTarget::Genus(0),
+            only: None,
+            band: 0.05,
+            necks: NeckOptions::default(),
+            max_loop_runs: 4,
+        }
+    }
+}
+
+/// The loop an operation is about.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RepairLoop {
+    /// `handle` (the solid cut through) or `tunnel` (the hole plugged).
+    #[serde(
+        serialize_with = "Side::serialize_as_neck",
+        deserialize_with = "Side::deserialize_from_neck"
+    )]
+    pub kind: Side,
+    /// The loop's length.
+    pub loop_length: f64,
+    /// Its centre.
+    pub center: [f64; 3],
+}
+
+impl RepairLoop {
+    fn of(neck: &NeckLoop) -> RepairLoop {
+        RepairLoop {
+            kind: neck.kind,
+            loop_length: neck.length,
+            center: neck.center,
+        }
+    }
+}
+
+/// One kept operation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RepairOperation {
+    /// Its loop.
+    #[serde(flatten)]
+    pub neck: RepairLoop,
+    /// The two caps' area.
+    pub cap_area: f64,
+    /// The enclosed volume's change.
+    pub volume_change: f64,
+    /// The `find_necks` run that found the loop (1: the first).
+    pub run: usize,
+}
+
+/// A loop not removed, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RepairSkip {
+    /// Its loop.
+    #[serde(flatten)]
+    pub neck: RepairLoop,
+    /// Why, one line.
+    pub reason: String,
+}
+
+/// What [`repair`] did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RepairReport {
+    /// Genus before and after (summed over the components).
+    pub genus: [i64; 2],
+    /// Enclosed volume before and after.
+    pub volume: [f64; 2],
+    /// The operations kept, in order.
+    pub operations: Vec<RepairOperation>,
+    /// The loops not removed, with reasons.
+    pub skipped: Vec<RepairSkip>,
+    /// `find_necks` runs.
+    pub loop_runs: usize,
+    /// Hausdorff distance between the input and the output (over their vertices).
+    pub hausdorff: f64,
+    /// What the caller should know: a target not reached, with the genus reached.
+    pub warnings: Vec<String>,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// Remove handles and tunnels of `surface` along their neck loops (see the module doc).
+/// Returns the repaired surface and the report.
+pub fn repair(
+    surface: &SurfaceMesh,
+    options: &RepairOptions,
+) -> Result<(SurfaceMesh, RepairReport)> {
+    let started = Instant::now();
+    check_options(options)?;
+    // 1. The loops, and what can be repaired.
+    let first = super::find_necks(surface, &options.necks)?;
+    let input = first.surface.clone();
+    let genus_before = solid_genus(&input)?;
+    if let RepairTarget::Genus(g) = options.target {
+        if g as i64 > genus_before {
+            return Err(Error::invalid_argument(format!(
+                "--genus {g}: the surface has genus {genus_before}; repair only removes handles and tunnels"
+            )));
+        }
+    }
+    let crossings = SurfaceDistance::new(&input).self_intersections(&input.triangles);
+    if !crossings.is_empty() {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            format!(
+                "the surface crosses itself ({} pairs of triangles): repair needs a surface that does not",
+                crossings.len()
+            ),
+        ));
+    }
+    let components = MeshReport::new(&input).components;
+    let done = |genus: i64| matches!(options.target, RepairTarget::Genus(g) if genus <= g as i64);
+
+    let mut current = input.clone();
+    let mut genus = genus_before;
+    let mut candidates = select(first.loops, options, 1);
+    let mut operations = Vec::new();
+    let mut skipped: Vec<RepairSkip> = Vec::new();
+    let mut runs = 1;
+    loop {
+        // 3. One operation at a time.
+        let mut kept_this_run = 0;
+        let mut disturbed = 0;
+        let mut queue = std::mem::take(&mut candidates).into_iter();
+        while let Some((neck, run)) = queue.next() {
+            if done(genus) {
+                break;
+            }
+            let outcome = cut_along_loop(&current, &neck, options.band)
+                .map_err(|e| e.message().to_string())
+                .and_then(|cut| checked(cut, components, genus - 1));
+            match outcome {
+                Ok(cut) => {
+                    operations.push(RepairOperation {
+                        neck: RepairLoop::of(&neck),
+                        cap_area: cut.cap_areas[0] + cut.cap_areas[1],
+                        volume_change: cut.volume_change,
+                        run,
+                    });
+                    genus -= 1;
+                    kept_this_run += 1;
+                    // The others carried onto the cut surface; those it disturbed wait
+                    // for the next run.
+                    let edges = edge_set(&cut.mesh);
+                    let waiting: Vec<(NeckLoop, usize)> = queue.collect();
+                    let carried: Vec<(NeckLoop, usize)> = waiting
+                        .iter()
+                        .filter_map(|(other, r)| {
+                            carry(other, &cut.vertex_map, &edges).map(|m| (m, *r))
+                        })
+                        .collect();
+                    disturbed += waiting.len() - carried.len();
+                    queue = carried.into_iter();
+                    current = cut.mesh;
+                }
+                Err(reason) => {
+                    // The same loop found again by a later run is reported once.
+                    let same = |s: &RepairSkip| {
+                        s.neck.kind == neck.kind
+                            && (s.neck.loop_length - neck.length).abs() <= 1e-9 * neck.length
+                    };
+                    if !skipped.iter().any(same) {
+                        skipped.push(RepairSkip {
+                            neck: RepairLoop::of(&neck),
+                            reason,
+                        });
+                    }
+                }
+            }
+        }
+        // 4. Another run for the loops the cuts disturbed.
+        // (With a length bound, only loops a cut disturbed can still be short.)
+        let bound = matches!(options.target, RepairTarget::MaxLength(_));
+        if done(genus)
+            || runs >= options.max_loop_runs
+            || kept_this_run == 0
+            || bound && disturbed == 0
+        {
+            break;
+        }
+        let again = super::find_necks(&current, &options.necks)?;
+        runs += 1;
+        current = again.surface;
+        candidates = select(again.loops, options, runs);
+        if candidates.is_empty() {
+            break;
+        }
+    }
+    let mut warnings = Vec::new();
+    if let RepairTarget::Genus(g) = options.target {
+        if genus > g as i64 {
+            warnings.push(format!(
+                "genus {genus} reached, not {g}: {} loops could not be removed (see skipped) after {runs} loop runs",
+                skipped.len()
+            ));
+        }
+    }
+    let hausdorff = hausdorff(&input, &current);
+    let report = RepairReport {
+        genus: [genus_before, genus],
+        volume: [input.signed_volume(), current.signed_volume()],
+        operations,
+        skipped,
+        loop_runs: runs,
+        hausdorff,
+        warnings,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    Ok((current, report))
+}
+
+fn check_options(options: &RepairOptions) -> Result<()> {
+    if !(options.band > 0.0 && options.band <= 0.5) {
+        return Err(Error::invalid_argument(format!(
+            "--band {}: it must lie in (0, 0.5] (a fraction of the loop's radius)",
+            options.band
+        )));
+    }
+    if let RepairTarget::MaxLength(l) = options.target {
+        if !(l > 0.0 && l.is_finite()) {
+            return Err(Error::invalid_argument(format!(
+                "--max-length {l}: it must be a positive length"
+            )));
+        }
+    }
+    if options.max_loop_runs == 0 {
+        return Err(Error::invalid_argument("max_loop_runs must be at least 1"));
+    }
+    Ok(())
+}
+
+/// The genus of a closed solid, summed over its components; an error otherwise.
+fn solid_genus(surface: &SurfaceMesh) -> Result<i64> {
+    let report = MeshReport::new(surface);
+    if !report.is_valid_solid() {
+        return Err(Error::new(
+            ErrorKind::InvalidMesh,
+            format!(
+                "repair needs a closed, manifold, oriented surface: {}",
+                report.problems().join("; ")
+            ),
+        ));
+    }
+    report
+        .genus
+        .iter()
+        .map(|g| g.ok_or_else(|| Error::new(ErrorKind::InvalidMesh, "a component has no genus")))
+        .sum()
+}
+
+/// Step 2: the loops to remove, shortest first, each with the run that found it.
+fn select(loops: Vec<NeckLoop>, options: &RepairOptions, run: usize) -> Vec<(NeckLoop, usize)> {
+    let mut chosen: Vec<(NeckLoop, usize)> = loops
+        .into_iter()
+        .filter(|l| options.only.is_none_or(|side| l.kind == side))
+        .filter(|l| match options.target {
+            RepairTarget::MaxLength(max) => l.length < max,
+            RepairTarget::Genus(_) => true,
+        })
+        .map(|l| (l, run))
+        .collect();
+    chosen.sort_by(|a, b| a.0.length.total_cmp(&b.0.length));
+    chosen
+}
+
+/// Step 3's checks: the cut surface is a valid solid of the same components and genus
+/// `genus`, and does not cross itself.
+fn checked(cut: Cut, components: usize, genus: i64) -> std::result::Result<Cut, String> {
+    let report = MeshReport::new(&cut.mesh);
+    if !report.is_valid_solid() {
+        return Err(format!(
+            "the cut leaves an invalid surface: {}",
+            report.problems().join("; ")
+        ));
+    }
+    if report.components != components {
+        return Err(format!(
+            "the cut leaves {} components, not {components}: its class is a sum of removed ones (it would cut a part off or enclose a cavity)",
+            report.components
+        ));
+    }
+    let found: i64 = report.genus.iter().flatten().sum();
+    if found != genus {
+        return Err(format!("the cut leaves genus {found}, not {genus}"));
+    }
+    let crossings = SurfaceDistance::new(&cut.mesh).self_intersections(&cut.mesh.triangles);
+    if !crossings.is_empty() {
+        return Err(format!(
+            "its caps cross the surface ({} pairs of triangles)",
+            crossings.len()
+        ));
+    }
+    Ok(cut)
+}
+
+fn edge_set(mesh: &SurfaceMesh) -> HashSet<[u32; 2]> {
+    mesh.triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])]))
+        .collect()
+}
+
+/// `neck` on the cut surface, when every point of it is on a vertex or an edge the cut
+/// kept.
+fn carry(neck: &NeckLoop, map: &[u32], edges: &HashSet<[u32; 2]>) -> Option<NeckLoop> {
+    let moved = |v: u32| map.get(v as usize).copied().filter(|&m| m != u32::MAX);
+    let points: Option<Vec<SurfacePoint>> = neck
+        .surface_points
+        .iter()
+        .map(|p| match *p {
+            SurfacePoint::Vertex { vertex } => {
+                moved(vertex).map(|vertex| SurfacePoint::Vertex { vertex })
+            }
+            SurfacePoint::Edge { edge: [a, b], t } => {
+                let e = [moved(a)?, moved(b)?];
+                edges
+                    .contains(&[e[0].min(e[1]), e[0].max(e[1])])
+                    .then_some(SurfacePoint::Edge { edge: e, t })
+            }
+        })
+        .collect();
+    let mut out = neck.clone();
+    out.surface_points = points?;
+    Some(out)
+}
+
+/// The largest distance from a vertex of either surface to the other.
+fn hausdorff(a: &SurfaceMesh, b: &SurfaceMesh) -> f64 {
+    let ab = SurfaceDistance::new(b).distances(&a.positions);
+    let ba = SurfaceDistance::new(a).distances(&b.positions);
+    ab.into_iter().chain(ba).fold(0.0, f64::max)
 }

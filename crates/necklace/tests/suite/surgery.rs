@@ -107,3 +107,101 @@ fn cutting_the_torus_through_its_handle_or_plugging_its_hole_leaves_a_valid_ball
         }
     }
 }
+
+fn torus_repaired(only: Option<Side>) -> (necklace::SurfaceMesh, necklace::pipeline::RepairReport) {
+    let mesh = Shape::new(ShapeKind::Torus).mesh().unwrap();
+    let options = necklace::pipeline::RepairOptions {
+        only,
+        ..Default::default()
+    };
+    necklace::pipeline::repair(&mesh, &options).unwrap()
+}
+
+#[test]
+fn repair_takes_the_torus_to_genus_0_by_its_cheaper_cut_or_by_a_plug_of_the_hole() {
+    let (big_r, r) = (1.0, 0.3);
+    for only in [None, Some(Side::Outside)] {
+        let (out, report) = torus_repaired(only);
+        let check = necklace::MeshReport::new(&out);
+        assert!(check.is_valid_solid(), "{:?}", check.problems());
+        assert_eq!(check.genus, vec![Some(0)]);
+        assert_eq!(report.genus, [1, 0]);
+        assert_eq!(report.operations.len(), 1);
+        let op = &report.operations[0];
+        // The band's half width: 0.05 of the loop's radius.
+        let delta = 0.05 * op.neck.loop_length / (2.0 * PI);
+        match only {
+            // The handle's cap (2πr²) is cheaper than the hole's (2π(R − r)²).
+            None => {
+                assert_eq!(op.neck.kind, Side::Inside);
+                assert!(
+                    (op.cap_area / (2.0 * PI * r * r) - 1.0).abs() < 0.05,
+                    "{}",
+                    op.cap_area
+                );
+                assert!(-op.volume_change / report.volume[0] < 0.02);
+            }
+            // The plug fills the hole's disk, 2δ thick.
+            _ => {
+                assert_eq!(op.neck.kind, Side::Outside);
+                let disk = PI * (big_r - r) * (big_r - r);
+                assert!(
+                    (op.cap_area / (2.0 * disk) - 1.0).abs() < 0.05,
+                    "{}",
+                    op.cap_area
+                );
+                assert!(
+                    (op.volume_change / (2.0 * delta * disk) - 1.0).abs() < 0.05,
+                    "{}",
+                    op.volume_change
+                );
+            }
+        }
+        // No neck loop is left.
+        let again = necklace::find_necks(&out, &necklace::Options::default()).unwrap();
+        assert!(again.loops.is_empty(), "{} loops left", again.loops.len());
+    }
+}
+
+#[test]
+fn repair_by_length_removes_the_rings_handles_only_and_changes_nothing_else() {
+    let shape = Shape::new(ShapeKind::Rings);
+    let wire = shape.param("wire");
+    let mesh = shape.mesh().unwrap();
+    let options = necklace::pipeline::RepairOptions {
+        target: necklace::pipeline::RepairTarget::MaxLength(3.0 * 2.0 * PI * wire),
+        ..Default::default()
+    };
+    let (out, report) = necklace::pipeline::repair(&mesh, &options).unwrap();
+    assert_eq!(report.operations.len(), shape.param("count") as usize);
+    assert!(report
+        .operations
+        .iter()
+        .all(|op| op.neck.kind == Side::Inside));
+    assert_eq!(necklace::MeshReport::new(&out).genus, vec![Some(0)]);
+    // The caps lie inside the wires: nothing moves farther than the wire's radius.
+    assert!(report.hausdorff < 1.5 * wire, "{}", report.hausdorff);
+}
+
+#[test]
+fn repair_refuses_a_genus_above_the_surfaces_and_an_open_surface_in_one_line() {
+    let torus = Shape::new(ShapeKind::Torus)
+        .with("res", 24.0)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    let options = necklace::pipeline::RepairOptions {
+        target: necklace::pipeline::RepairTarget::Genus(2),
+        ..Default::default()
+    };
+    let err = necklace::pipeline::repair(&torus, &options)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("--genus 2: the surface has genus 1"), "{err}");
+    let mut open = torus.clone();
+    open.triangles.pop();
+    let err = necklace::pipeline::repair(&open, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(!err.contains('\n'), "{err}");
+}
