@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 use super::NeckOptions;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
-use crate::geom::{add, scale, sub};
+use crate::geom::{add, norm, scale, sub};
 use crate::loops::{NeckLoop, SurfacePoint};
 use crate::mesh::{remove_unreferenced, MeshReport, Side, SurfaceMesh, Topology};
 use crate::segment::{segment, CurvePoint};
@@ -51,13 +51,28 @@ pub struct Cut {
 }
 
 /// Remove the class of `neck` (found on `surface`): the band between the curves at
-/// `band` × its radius on either side is cut out and each boundary closed by a cap
+/// `band` × its radius (at least half the mean length of the edges it crosses) on
+/// either side is cut out and each boundary closed by a cap
 /// started on the cone from the loop's saddle, moved with the boundary.
 pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Result<Cut> {
     // 1. The band's two curves.
     let topology = Topology::new(surface);
     let curve = loop_on_surface(neck);
-    let delta = band * neck.radius;
+    // At least half an edge: a band much narrower than the triangles it crosses leaves
+    // curves too close to the loop's vertices to be told apart.
+    let edges: Vec<f64> = neck
+        .surface_points
+        .iter()
+        .filter_map(|p| match *p {
+            SurfacePoint::Edge { edge: [a, b], .. } => Some(norm(sub(
+                surface.positions[a as usize],
+                surface.positions[b as usize],
+            ))),
+            SurfacePoint::Vertex { .. } => None,
+        })
+        .collect();
+    let mean_edge = edges.iter().sum::<f64>() / edges.len().max(1) as f64;
+    let delta = (band * neck.radius).max(0.5 * mean_edge);
     let offsets = offset_curves(surface, &topology, &curve, delta)?;
 
     // 2. The surface cut along them; the band is the annulus between them.
@@ -233,7 +248,7 @@ pub struct RepairOptions {
     /// Only handles (`Inside`: cuts) or only tunnels (`Outside`: plugs); default both.
     pub only: Option<Side>,
     /// Each side of the band a cut removes lies this fraction of the loop's radius from
-    /// it (default 0.05).
+    /// it, at least half an edge (default 0.05).
     pub band: f64,
     /// The loops' options.
     pub necks: NeckOptions,
@@ -285,6 +300,8 @@ pub struct RepairOperation {
     /// Its loop.
     #[serde(flatten)]
     pub neck: RepairLoop,
+    /// The band's width (twice the distance of each side from the loop).
+    pub band_width: f64,
     /// The two caps' area.
     pub cap_area: f64,
     /// The enclosed volume's change.
@@ -378,6 +395,7 @@ pub fn repair(
                 Ok(cut) => {
                     operations.push(RepairOperation {
                         neck: RepairLoop::of(&neck),
+                        band_width: 2.0 * cut.delta,
                         cap_area: cut.cap_areas[0] + cut.cap_areas[1],
                         volume_change: cut.volume_change,
                         run,

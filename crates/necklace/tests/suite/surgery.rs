@@ -128,8 +128,7 @@ fn repair_takes_the_torus_to_genus_0_by_its_cheaper_cut_or_by_a_plug_of_the_hole
         assert_eq!(report.genus, [1, 0]);
         assert_eq!(report.operations.len(), 1);
         let op = &report.operations[0];
-        // The band's half width: 0.05 of the loop's radius.
-        let delta = 0.05 * op.neck.loop_length / (2.0 * PI);
+        let delta = 0.5 * op.band_width;
         match only {
             // The handle's cap (2πr²) is cheaper than the hole's (2π(R − r)²).
             None => {
