@@ -7,8 +7,9 @@
 //! loop's span the hole outside it (the hole is plugged).
 //!
 //! [`repair`] reads as the recipe:
-//! 1. `find_necks` on the input; refuse what cannot be repaired (open, crossing itself,
-//!    a target genus above the surface's).
+//! 1. The input step (welding, orientation); refuse what cannot be repaired (open,
+//!    crossing itself, a target genus above the surface's) before any loop is sought;
+//!    then `find_necks`.
 //! 2. The candidates: the loops of the kinds asked for (and, with a length bound, the
 //!    shorter ones), shortest first (a cap's area grows with its loop's length squared,
 //!    so this is cheapest first).
@@ -349,10 +350,9 @@ pub fn repair(
 ) -> Result<(SurfaceMesh, RepairReport)> {
     let started = Instant::now();
     check_options(options)?;
-    // 1. The loops, and what can be repaired.
-    let first = super::find_necks(surface, &options.necks)?;
-    let input = first.surface.clone();
-    let genus_before = solid_genus(&input)?;
+    // 1. What can be repaired, refused before any loop is sought; then the loops.
+    let prepared = super::prepare_input_with(surface.clone(), &options.necks.input)?;
+    let genus_before = solid_genus(&prepared.mesh_report)?;
     if let RepairTarget::Genus(g) = options.target {
         if g as i64 > genus_before {
             return Err(Error::invalid_argument(format!(
@@ -360,16 +360,17 @@ pub fn repair(
             )));
         }
     }
-    let crossings = SurfaceDistance::new(&input).self_intersections(&input.triangles);
-    if !crossings.is_empty() {
+    if !prepared.crossing_faces.is_empty() {
         return Err(Error::new(
             ErrorKind::InvalidMesh,
             format!(
-                "the surface crosses itself ({} pairs of triangles): repair needs a surface that does not",
-                crossings.len()
+                "the surface crosses itself ({} triangles): repair needs a surface that does not",
+                prepared.crossing_faces.len()
             ),
         ));
     }
+    let first = super::find_necks(&prepared.mesh, &options.necks)?;
+    let input = first.surface.clone();
     let components = MeshReport::new(&input).components;
     let done = |genus: i64| matches!(options.target, RepairTarget::Genus(g) if genus <= g as i64);
 
@@ -493,8 +494,7 @@ fn check_options(options: &RepairOptions) -> Result<()> {
 }
 
 /// The genus of a closed solid, summed over its components; an error otherwise.
-fn solid_genus(surface: &SurfaceMesh) -> Result<i64> {
-    let report = MeshReport::new(surface);
+fn solid_genus(report: &MeshReport) -> Result<i64> {
     if !report.is_valid_solid() {
         return Err(Error::new(
             ErrorKind::InvalidMesh,
