@@ -211,6 +211,10 @@ pub enum Command {
         /// from it.
         #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
         band: f64,
+        /// Draw the input and the output side by side, the removed loops marked, into
+        /// DIR/repair.png.
+        #[arg(long, value_name = "DIR")]
+        png: Option<PathBuf>,
         #[command(flatten)]
         method: MethodArgs,
         /// Print one JSON object instead of text.

@@ -4,7 +4,7 @@
 //! Exit status: 0 on success, 2 for bad input (unreadable or malformed file, bad
 //! argument), 1 for any other failure. Errors are one line on stderr.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
@@ -171,6 +171,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             max_length,
             only,
             band,
+            png,
             method,
             json,
         } => {
@@ -192,7 +193,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
                 },
                 ..pipeline::RepairOptions::default()
             };
-            repair(mesh, &options, output, json)
+            repair(mesh, &options, output, png, json, ui)
         }
         Command::View { dir, mesh } => view(dir, mesh),
         Command::Segment {
@@ -349,18 +350,41 @@ fn repair(
     path: PathBuf,
     options: &pipeline::RepairOptions,
     output: PathBuf,
+    png: Option<PathBuf>,
     json: bool,
+    ui: &Ui,
 ) -> Result<String> {
     io::check_mesh_name(&output)?;
     check_output_file(&output)?;
+    if let Some(dir) = &png {
+        check_output_folder(dir)?;
+    }
     let surface = io::read_mesh(&path)?;
-    let (repaired, report) = pipeline::repair(&surface, options).map_err(|e| e.in_file(&path))?;
+    let (repaired, report) = pipeline::repair_with_progress(&surface, options, &ui.bars)
+        .map_err(|e| e.in_file(&path))?;
     print::warn(&report.warnings);
     io::write_mesh(&output, &repaired)?;
+    if let Some(dir) = &png {
+        let picture = RenderOptions {
+            size: 900,
+            ..RenderOptions::default()
+        };
+        let name = file_name(&path);
+        necklace::output::repair_picture(&name, &surface, &repaired, &report, &picture)?
+            .write_png(dir.join("repair.png"))?;
+    }
     if json {
         return Ok(serde_json::to_string_pretty(&report)? + "\n");
     }
     Ok(print::repair_text(&path, &report, &output))
+}
+
+/// A mesh file's name, for titles (the whole path when it has none).
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
 }
 
 fn view(dir: PathBuf, mesh: Option<PathBuf>) -> Result<String> {
@@ -376,10 +400,7 @@ fn view(dir: PathBuf, mesh: Option<PathBuf>) -> Result<String> {
     necklace::output::check_overlay(&surface, &curves, &[])?;
     let page = dir.join("view.html");
     check_output_file(&page)?;
-    let name = mesh.file_name().map_or_else(
-        || mesh.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
+    let name = file_name(&mesh);
     let shown = necklace::output::write_html(&page, &name, &surface, &report)?;
     let decimated = if shown.shown_triangles < shown.triangles {
         format!(
@@ -460,10 +481,7 @@ fn render(
         None => Vec::new(),
     };
     necklace::output::check_overlay(&surface, &curves, &saddles)?;
-    let name = mesh.file_name().map_or_else(
-        || mesh.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
+    let name = file_name(&mesh);
     let scene = necklace::output::loop_scene(&name, &surface, &curves, &saddles);
     let rendered = necklace::render::render(&scene, options)?;
     rendered.image.write_png(&output)?;

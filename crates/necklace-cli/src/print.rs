@@ -402,11 +402,12 @@ pub fn repair_text(
     for op in &report.operations {
         let _ = writeln!(
             text,
-            "  {:14} loop length {:.4e}  caps {:.4e}  volume {:+.4e}",
+            "  {:14} loop length {:.4e}  caps {:.4e}  volume {:+.4e}  moved {:.4e}",
             names(op.neck.kind).0,
             op.neck.loop_length,
             op.cap_area,
-            op.volume_change
+            op.volume_change,
+            op.max_displacement
         );
     }
     for skip in &report.skipped {

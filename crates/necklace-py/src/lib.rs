@@ -20,11 +20,13 @@ use std::time::{Duration, Instant};
 
 use necklace::loops::LoopOptions;
 use necklace::morse::{MorseOptions, Preconditioner, Schedule, SolverOptions};
-use necklace::pipeline::{InputOptions, NeckOptions, NeckReport, TrackedPoint};
+use necklace::pipeline::{
+    InputOptions, NeckOptions, NeckReport, RepairOptions, RepairTarget, TrackedPoint,
+};
 use necklace::progress::Progress;
 use necklace::simplify::SimplifyOptions;
 use necklace::volume::VolumeOptions;
-use necklace::SurfaceMesh;
+use necklace::{Side, SurfaceMesh};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
@@ -301,6 +303,65 @@ fn side_arrays<'py>(py: Python<'py>, report: &NeckReport) -> PyResult<Bound<'py,
     Ok(sides)
 }
 
+/// The surface of `vertices (n, 3)` and `faces (m, 3)`.
+fn surface_of(
+    vertices: &PyReadonlyArray2<'_, f64>,
+    faces: &PyReadonlyArray2<'_, u32>,
+) -> PyResult<SurfaceMesh> {
+    let (vertices, faces) = (vertices.as_array(), faces.as_array());
+    if vertices.ncols() != 3 || faces.ncols() != 3 {
+        return Err(NecklaceError::new_err(
+            "vertices and faces must have 3 columns",
+        ));
+    }
+    Ok(SurfaceMesh {
+        positions: vertices
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect(),
+        triangles: faces
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect(),
+    })
+}
+
+/// Run `work` with the GIL released, its progress going to `progress` (a Python
+/// callable) or nowhere; an exception the callable raised is raised after it.
+fn with_progress<T: Send>(
+    py: Python<'_>,
+    progress: Option<Py<PyAny>>,
+    work: impl FnOnce(&dyn Progress) -> necklace::Result<T> + Send,
+) -> PyResult<T> {
+    let reporter = progress.map(|callback| PyProgress {
+        callback,
+        state: Mutex::new(ProgressState {
+            lanes: BTreeMap::new(),
+            last_call: Instant::now(),
+            error: None,
+        }),
+    });
+    let result = py.detach(|| {
+        guarded(|| {
+            let silent = necklace::progress::Silent;
+            let progress: &dyn Progress = match &reporter {
+                Some(p) => p,
+                None => &silent,
+            };
+            work(progress)
+        })
+    });
+    if let Some(error) = reporter
+        .and_then(|r| r.state.into_inner().ok())
+        .and_then(|s| s.error)
+    {
+        return Err(error);
+    }
+    result
+}
+
 /// `find_necks(vertices, faces, options, progress)`: `vertices` float64 `(n, 3)`, `faces`
 /// uint32 `(m, 3)` (both C-contiguous; the Python wrapper converts), `options` a dict of
 /// the CLI's option names. Returns `(report_json, sides)`.
@@ -314,49 +375,10 @@ fn find_necks<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(String, Bound<'py, PyList>)> {
     let options = neck_options(options)?;
-    let (vertices, faces) = (vertices.as_array(), faces.as_array());
-    if vertices.ncols() != 3 || faces.ncols() != 3 {
-        return Err(NecklaceError::new_err(
-            "vertices and faces must have 3 columns",
-        ));
-    }
-    let surface = SurfaceMesh {
-        positions: vertices
-            .rows()
-            .into_iter()
-            .map(|r| [r[0], r[1], r[2]])
-            .collect(),
-        triangles: faces
-            .rows()
-            .into_iter()
-            .map(|r| [r[0], r[1], r[2]])
-            .collect(),
-    };
-    let reporter = progress.map(|callback| PyProgress {
-        callback,
-        state: Mutex::new(ProgressState {
-            lanes: BTreeMap::new(),
-            last_call: Instant::now(),
-            error: None,
-        }),
-    });
-    let report = py.detach(|| {
-        guarded(|| {
-            let silent = necklace::progress::Silent;
-            let progress: &dyn Progress = match &reporter {
-                Some(p) => p,
-                None => &silent,
-            };
-            necklace::pipeline::find_necks_with_progress(&surface, &options, progress)
-        })
-    });
-    if let Some(error) = reporter
-        .and_then(|r| r.state.into_inner().ok())
-        .and_then(|s| s.error)
-    {
-        return Err(error);
-    }
-    let report = report?;
+    let surface = surface_of(&vertices, &faces)?;
+    let report = with_progress(py, progress, |progress| {
+        necklace::pipeline::find_necks_with_progress(&surface, &options, progress)
+    })?;
     let json = guarded(|| {
         let value = necklace::output::report_json(&report, None)?;
         serde_json::to_string(&value).map_err(|e| {
@@ -367,6 +389,61 @@ fn find_necks<'py>(
         })
     })?;
     Ok((json, side_arrays(py, &report)?))
+}
+
+/// `repair(vertices, faces, options, progress)`: `options` holds `find_necks`'s keys
+/// and `genus`, `max_length`, `only` (`"handles"` / `"tunnels"`), `band`. Returns the
+/// repaired `(V float64 (n, 3), F int64 (m, 3), report_json)`.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, options, progress=None))]
+fn repair<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, u32>,
+    options: &Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, String)> {
+    let defaults = RepairOptions::default();
+    let genus = option::<Option<usize>>(options, "genus", None)?;
+    let max_length = option::<Option<f64>>(options, "max_length", None)?;
+    if genus.is_some() && max_length.is_some() {
+        return Err(NecklaceError::new_err(
+            "genus and max_length exclude each other: give one",
+        ));
+    }
+    let only = match option::<Option<String>>(options, "only", None)?.as_deref() {
+        None => None,
+        Some("handles") => Some(Side::Inside),
+        Some("tunnels") => Some(Side::Outside),
+        Some(other) => {
+            return Err(NecklaceError::new_err(format!(
+                "option only = '{other}': expected 'handles' or 'tunnels'"
+            )))
+        }
+    };
+    let options = RepairOptions {
+        target: match max_length {
+            Some(l) => RepairTarget::MaxLength(l),
+            None => RepairTarget::Genus(genus.unwrap_or(0)),
+        },
+        only,
+        band: option(options, "band", defaults.band)?,
+        necks: neck_options(options)?,
+        ..defaults
+    };
+    let surface = surface_of(&vertices, &faces)?;
+    let (repaired, report) = with_progress(py, progress, |progress| {
+        necklace::pipeline::repair_with_progress(&surface, &options, progress)
+    })?;
+    let json = serde_json::to_string(&report).map_err(error)?;
+    let positions: Vec<f64> = repaired.positions.iter().flatten().copied().collect();
+    let faces: Vec<i64> = repaired
+        .triangles
+        .iter()
+        .flatten()
+        .map(|&v| i64::from(v))
+        .collect();
+    Ok((matrix(py, positions, 3)?, matrix(py, faces, 3)?, json))
 }
 
 /// `load_mesh(path)`: the vertices `(n, 3)` float64 and faces `(m, 3)` int64 of an OBJ,
@@ -538,6 +615,7 @@ fn _necklace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("JSON_VERSION", necklace::output::JSON_VERSION)?;
     m.add_function(wrap_pyfunction!(find_necks, m)?)?;
     m.add_function(wrap_pyfunction!(load_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(repair, m)?)?;
     m.add_function(wrap_pyfunction!(defaults, m)?)?;
     m.add_function(wrap_pyfunction!(batch_inputs, m)?)?;
     m.add_function(wrap_pyfunction!(batch_options, m)?)?;

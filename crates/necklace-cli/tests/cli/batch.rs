@@ -354,7 +354,17 @@ fn repair_writes_a_genus_0_surface_and_refuses_bad_targets_in_one_line() {
     let dir = temp_dir("repair");
     let meshes = shapes(&dir);
     let out = dir.join("repaired.obj");
-    let run = necklace(&["repair", s(&meshes[0]), "-o", s(&out), "--json", "-q"]);
+    let pictures = dir.join("pictures");
+    let run = necklace(&[
+        "repair",
+        s(&meshes[0]),
+        "-o",
+        s(&out),
+        "--png",
+        s(&pictures),
+        "--json",
+        "-q",
+    ]);
     assert!(
         run.status.success(),
         "{}",
@@ -362,16 +372,35 @@ fn repair_writes_a_genus_0_surface_and_refuses_bad_targets_in_one_line() {
     );
     let report: Value = serde_json::from_slice(&run.stdout).unwrap();
     assert_eq!(report["genus"], serde_json::json!([1, 0]));
+    // Before and after side by side, each half 900 pixels wide.
+    let picture = necklace::render::Image::read_png(pictures.join("repair.png")).unwrap();
+    assert_eq!(picture.width, 1800);
     let info = necklace(&["info", s(&out), "--json"]);
     let info: Value = serde_json::from_slice(&info.stdout).unwrap();
     assert_eq!(info["genus"], serde_json::json!([0]));
     assert_eq!(info["watertight"], serde_json::json!(true));
+    // An open surface: the first mesh less one triangle.
+    let mut open = necklace::io::read_mesh(&meshes[0]).unwrap();
+    open.triangles.pop();
+    let open_mesh = dir.join("open.obj");
+    necklace::io::write_mesh(&open_mesh, &open).unwrap();
+    let bad_output = dir.join("repaired.txt");
     for args in [
-        vec!["--genus", "3"],
-        vec!["--genus", "0", "--max-length", "1"],
-        vec!["--max-length", "-1"],
+        vec![s(&meshes[0]), "-o", s(&out), "--genus", "3"],
+        vec![
+            s(&meshes[0]),
+            "-o",
+            s(&out),
+            "--genus",
+            "0",
+            "--max-length",
+            "1",
+        ],
+        vec![s(&meshes[0]), "-o", s(&out), "--max-length", "-1"],
+        vec![s(&meshes[0]), "-o", s(&bad_output)],
+        vec![s(&open_mesh), "-o", s(&out)],
     ] {
-        let run = necklace(&[&["repair", s(&meshes[0]), "-o", s(&out), "-q"], &args[..]].concat());
+        let run = necklace(&[&["repair", "-q"], &args[..]].concat());
         assert_eq!(run.status.code(), Some(2), "{args:?}");
         assert_eq!(
             String::from_utf8_lossy(&run.stderr).lines().count(),

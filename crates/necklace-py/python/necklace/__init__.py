@@ -26,10 +26,12 @@ import numpy as np
 from ._necklace import JSON_VERSION, NecklaceError, __version__
 from ._necklace import find_necks as _find_necks
 from ._necklace import load_mesh as _load_mesh
+from ._necklace import repair as _repair
 from ._batch import batch
 
 __all__ = [
     "find_necks",
+    "repair",
     "batch",
     "load_mesh",
     "NecklaceError",
@@ -507,6 +509,75 @@ def find_necks(
         raise NecklaceError("progress: not callable")
     text, sides = _find_necks(v, f, options, progress)
     return _result(json.loads(text), sides)
+
+
+# find_necks's keyword arguments that reach the library (repair takes them too).
+_FIND_NECKS_OPTIONS = [
+    name
+    for name in find_necks.__code__.co_varnames[
+        2 : 2 + find_necks.__code__.co_kwonlyargcount
+    ]
+    if name != "progress"
+]
+
+
+def repair(
+    vertices: Any,
+    faces: Any,
+    *,
+    genus: Optional[int] = None,
+    max_length: Optional[float] = None,
+    only: Optional[str] = None,
+    band: float = 0.05,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+    **options: Any,
+) -> Tuple[np.ndarray, np.ndarray, Dict[str, Any]]:
+    """Remove handles and tunnels along their neck loops (``necklace repair``).
+
+    A handle is cut through along a thin band round its loop and a tunnel's hole is
+    plugged; each opening is closed by a faired cap. Loops go shortest first, and each
+    operation is checked (a closed solid, the genus one lower, no crossings) or skipped
+    with its reason.
+
+    Args:
+        vertices, faces: the closed surface, as for :func:`find_necks`.
+        genus: remove classes until the surface has this genus (default 0).
+        max_length: instead, remove every loop shorter than this (noise), whatever
+            genus results. Excludes ``genus``.
+        only: ``"handles"`` (only cuts) or ``"tunnels"`` (only plugs); default both.
+        band: each side of the band a cut removes lies this fraction of the loop's
+            radius from it (at least half an edge), in (0, 0.5].
+        progress: as for :func:`find_necks`, called through each loop run.
+        **options: :func:`find_necks`'s keyword arguments (``h``, ``levels``, ...),
+            for the loop runs.
+
+    Returns:
+        ``(V, F, report)``: the repaired surface, ``(n, 3)`` float64 and ``(m, 3)``
+        int64, and the report as ``necklace repair --json`` prints it: ``genus``
+        (before, after), ``volume`` (before, after), ``operations`` (``kind``,
+        ``loop_length``, ``center``, ``band_width``, ``cap_area``, ``volume_change``,
+        ``max_displacement``, ``run``, ``points``), ``skipped`` (with ``reason``),
+        ``loop_runs``, ``hausdorff``, ``warnings``, ``seconds``.
+
+    Raises:
+        NecklaceError: what :func:`find_necks` refuses, and an open or self-crossing
+            surface, a ``genus`` above the surface's, ``genus`` with ``max_length``. The
+            message is one line.
+    """
+    v = _as_vertices(vertices)
+    f = _as_faces(faces, len(v))
+    unknown = sorted(set(options) - set(_FIND_NECKS_OPTIONS))
+    if unknown:
+        raise NecklaceError(f"repair: unknown option {unknown[0]!r}")
+    if genus is not None and max_length is not None:
+        raise NecklaceError("repair: genus and max_length exclude each other: give one")
+    if genus is not None and (isinstance(genus, bool) or not isinstance(genus, int) or genus < 0):
+        raise NecklaceError(f"repair: genus = {genus!r}: expected an integer >= 0")
+    if progress is not None and not callable(progress):
+        raise NecklaceError("progress: not callable")
+    options.update(genus=genus, max_length=max_length, only=only, band=band)
+    vertices_out, faces_out, text = _repair(v, f, options, progress)
+    return vertices_out, faces_out, json.loads(text)
 
 
 def load_mesh(path: "str | os.PathLike[str]") -> Tuple[np.ndarray, np.ndarray]:

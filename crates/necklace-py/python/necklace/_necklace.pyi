@@ -21,6 +21,15 @@ def find_necks(
     faces; returns the report's JSON text and, per side, the critical points (and the
     volume with ``options["volume"]``) as arrays."""
 
+def repair(
+    vertices: npt.NDArray[np.float64],
+    faces: npt.NDArray[np.uint32],
+    options: Dict[str, Any],
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], str]:
+    """Remove handles and tunnels; returns the repaired ``(V, F)`` and the report's
+    JSON text."""
+
 def load_mesh(path: str) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
     """``(V, F)`` of an OBJ, OFF, PLY or STL file: float64 ``(n, 3)``, int64 ``(m, 3)``."""
 

@@ -23,6 +23,9 @@
 //!   of each side over scale, the necks in their kind's colour; `field.vtu` (volume meshes of both sides with the
 //!   smoothed field and the side per vertex, for ParaView) with the volume kept.
 //!
+//! A repair (`necklace repair --png`): [`repair_picture`], the input and the output
+//! side by side with the removed loops.
+//!
 //! A segmentation (`necklace segment`): [`write_segmentation`] (the surface cut along
 //! the loops as PLY, each face carrying `segment`) and [`segments_json`].
 //!
@@ -42,7 +45,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::io;
 use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::VertexType;
-use crate::pipeline::{NeckReport, TrackedPoint};
+use crate::pipeline::{NeckReport, RepairReport, TrackedPoint};
 use crate::render::{self, Curve, Dot, LegendEntry, Mark, RenderOptions, Scene};
 use crate::segment::Segmentation;
 use crate::tet::TetMesh;
@@ -268,6 +271,36 @@ pub fn loop_scene<'a>(
             .collect(),
         legend,
     }
+}
+
+/// `necklace repair`'s picture: the input (left) and the output (right), each with
+/// the removed loops in their kind's colour, labelled by operation; `options.size` is
+/// each half's width.
+pub fn repair_picture(
+    name: &str,
+    input: &SurfaceMesh,
+    output: &SurfaceMesh,
+    report: &RepairReport,
+    options: &RenderOptions,
+) -> Result<render::Image> {
+    let curves: Vec<LoopCurve> = report
+        .operations
+        .iter()
+        .map(|op| LoopCurve {
+            kind: op.neck.kind,
+            points: op.points.clone(),
+        })
+        .collect();
+    let mut halves = Vec::new();
+    for (surface, when, genus) in [
+        (input, "before", report.genus[0]),
+        (output, "after", report.genus[1]),
+    ] {
+        let mut scene = loop_scene(name, surface, &curves, &[]);
+        scene.title = Some(format!("{name} {when}: genus {genus}"));
+        halves.push(render::render(&scene, options)?.image);
+    }
+    Ok(halves[0].beside(&halves[1], options.background))
 }
 
 /// Write a segmentation as binary PLY: the refined surface (the loops are edges of it),

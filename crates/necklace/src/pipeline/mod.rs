@@ -65,8 +65,8 @@ pub use input::{
     prepare_surface, weld_input, InputOptions, PreparedSurface, WeldedInput, DEFAULT_WELD,
 };
 pub use repairing::{
-    cut_along_loop, loop_on_surface, repair, Cut, RepairLoop, RepairOperation, RepairOptions,
-    RepairReport, RepairSkip, RepairTarget,
+    cut_along_loop, loop_on_surface, repair, repair_with_progress, Cut, RepairLoop,
+    RepairOperation, RepairOptions, RepairReport, RepairSkip, RepairTarget,
 };
 use report::SideRun;
 pub use report::{

@@ -32,6 +32,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, norm, scale, sub};
 use crate::loops::{NeckLoop, SurfacePoint};
 use crate::mesh::{remove_unreferenced, MeshReport, Side, SurfaceMesh, Topology};
+use crate::progress::{Progress, Silent};
 use crate::segment::{segment, CurvePoint};
 use crate::surgery::{cap, offset_curves, CapOptions, OnSurface};
 
@@ -49,6 +50,8 @@ pub struct Cut {
     /// For each vertex of the surface cut, its index in `mesh` (`u32::MAX`: removed with
     /// the band).
     pub vertex_map: Vec<u32>,
+    /// The caps' vertices off their boundaries (the new points of the surface).
+    pub cap_points: Vec<[f64; 3]>,
 }
 
 /// Remove the class of `neck` (found on `surface`): the band between the curves at
@@ -126,6 +129,7 @@ pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Resu
     let mut positions = cut.mesh.positions.clone();
     let mut triangles = kept;
     let mut cap_areas = [0.0; 2];
+    let mut cap_points = Vec::new();
     for (k, cycle) in cycles.iter().enumerate() {
         // The cap runs each boundary edge the other way from the surface beside it.
         let ids: Vec<u32> = std::iter::once(cycle[0])
@@ -138,6 +142,7 @@ pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Resu
         let first = positions.len() as u32;
         let n = ids.len() as u32;
         positions.extend(&disk.mesh.positions[ids.len()..]);
+        cap_points.extend(&disk.mesh.positions[ids.len()..]);
         triangles.extend(disk.mesh.triangles.iter().map(|t| {
             t.map(|v| {
                 if v < n {
@@ -166,6 +171,7 @@ pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Resu
         cap_areas,
         volume_change,
         vertex_map,
+        cap_points,
     })
 }
 
@@ -307,8 +313,13 @@ pub struct RepairOperation {
     pub cap_area: f64,
     /// The enclosed volume's change.
     pub volume_change: f64,
+    /// The largest distance from a cap's vertex to the input surface: how far the
+    /// surface moved.
+    pub max_displacement: f64,
     /// The `find_necks` run that found the loop (1: the first).
     pub run: usize,
+    /// The loop's points (on the surface it was found on).
+    pub points: Vec<[f64; 3]>,
 }
 
 /// A loop not removed, and why.
@@ -348,6 +359,15 @@ pub fn repair(
     surface: &SurfaceMesh,
     options: &RepairOptions,
 ) -> Result<(SurfaceMesh, RepairReport)> {
+    repair_with_progress(surface, options, &Silent)
+}
+
+/// [`repair`], reporting each `find_necks` run's stages to `progress`.
+pub fn repair_with_progress(
+    surface: &SurfaceMesh,
+    options: &RepairOptions,
+    progress: &dyn Progress,
+) -> Result<(SurfaceMesh, RepairReport)> {
     let started = Instant::now();
     check_options(options)?;
     // 1. What can be repaired, refused before any loop is sought; then the loops.
@@ -369,8 +389,9 @@ pub fn repair(
             ),
         ));
     }
-    let first = super::find_necks(&prepared.mesh, &options.necks)?;
+    let first = super::find_necks_with_progress(&prepared.mesh, &options.necks, progress)?;
     let input = first.surface.clone();
+    let input_distance = SurfaceDistance::without_winding(&input);
     let components = MeshReport::new(&input).components;
     let done = |genus: i64| matches!(options.target, RepairTarget::Genus(g) if genus <= g as i64);
 
@@ -399,7 +420,12 @@ pub fn repair(
                         band_width: 2.0 * cut.delta,
                         cap_area: cut.cap_areas[0] + cut.cap_areas[1],
                         volume_change: cut.volume_change,
+                        max_displacement: input_distance
+                            .distances(&cut.cap_points)
+                            .into_iter()
+                            .fold(0.0, f64::max),
                         run,
+                        points: neck.points.clone(),
                     });
                     genus -= 1;
                     kept_this_run += 1;
@@ -442,7 +468,7 @@ pub fn repair(
         {
             break;
         }
-        let again = super::find_necks(&current, &options.necks)?;
+        let again = super::find_necks_with_progress(&current, &options.necks, progress)?;
         runs += 1;
         current = again.surface;
         candidates = select(again.loops, options, runs);
@@ -459,7 +485,7 @@ pub fn repair(
             ));
         }
     }
-    let hausdorff = hausdorff(&input, &current);
+    let hausdorff = hausdorff(&input, &input_distance, &current);
     let report = RepairReport {
         genus: [genus_before, genus],
         volume: [input.signed_volume(), current.signed_volume()],
@@ -587,9 +613,10 @@ fn carry(neck: &NeckLoop, map: &[u32], edges: &HashSet<[u32; 2]>) -> Option<Neck
     Some(out)
 }
 
-/// The largest distance from a vertex of either surface to the other.
-fn hausdorff(a: &SurfaceMesh, b: &SurfaceMesh) -> f64 {
-    let ab = SurfaceDistance::new(b).distances(&a.positions);
-    let ba = SurfaceDistance::new(a).distances(&b.positions);
+/// The largest distance from a vertex of either surface to the other (`to_a`: the
+/// distance to `a`).
+fn hausdorff(a: &SurfaceMesh, to_a: &SurfaceDistance, b: &SurfaceMesh) -> f64 {
+    let ab = SurfaceDistance::without_winding(b).distances(&a.positions);
+    let ba = to_a.distances(&b.positions);
     ab.into_iter().chain(ba).fold(0.0, f64::max)
 }

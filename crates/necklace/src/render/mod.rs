@@ -304,6 +304,23 @@ impl Image {
         Ok(bytes)
     }
 
+    /// This picture with `right` beside it, the shorter one padded below with
+    /// `background`.
+    pub fn beside(&self, right: &Image, background: [u8; 3]) -> Image {
+        let (width, height) = (self.width + right.width, self.height.max(right.height));
+        let mut pixels = Vec::with_capacity((width * height) as usize);
+        for y in 0..height {
+            for (image, w) in [(self, self.width), (right, right.width)] {
+                pixels.extend((0..w).map(|x| image.pixel(x, y).unwrap_or(background)));
+            }
+        }
+        Image {
+            width,
+            height,
+            pixels,
+        }
+    }
+
     /// Write as a PNG file; errors name the file.
     pub fn write_png(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
