@@ -13,7 +13,8 @@
 //! 2. The candidates: the loops of the kinds asked for (and, with a length bound, the
 //!    shorter ones), shortest first (a cap's area grows with its loop's length squared,
 //!    so this is cheapest first).
-//! 3. One at a time: the operation, then its checks — a valid closed solid, the same
+//! 3. One at a time: the operation (its caps faired to the least area; harmonic, then
+//!    cones from the saddle, where those cross the surface), then its checks — a valid closed solid, the same
 //!    components, the genus one lower (a class that depends on removed ones would cut
 //!    a part off or enclose a cavity), no crossings. A failed check skips the loop with
 //!    its reason; a kept one replaces the surface, and the other candidates are carried
@@ -29,12 +30,12 @@ use serde::{Deserialize, Serialize};
 use super::NeckOptions;
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
-use crate::geom::{add, norm, scale, sub};
+use crate::geom::{add, closest_on_segment, norm, scale, sub};
 use crate::loops::{NeckLoop, SurfacePoint};
 use crate::mesh::{remove_unreferenced, MeshReport, Side, SurfaceMesh, Topology};
 use crate::progress::{Progress, Silent};
 use crate::segment::{segment, CurvePoint};
-use crate::surgery::{cap, offset_curves, CapOptions, OnSurface};
+use crate::surgery::{cap, offset_curves, refine_near, CapOptions, Fairing, OnSurface};
 
 /// What [`cut_along_loop`] did.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,27 +53,53 @@ pub struct Cut {
     pub vertex_map: Vec<u32>,
     /// The caps' vertices off their boundaries (the new points of the surface).
     pub cap_points: Vec<[f64; 3]>,
+    /// How the caps were faired.
+    pub fairing: Fairing,
+    /// The surface was refined within this distance of the loop.
+    pub refined_within: f64,
 }
 
-/// Remove the class of `neck` (found on `surface`): the band between the curves at
-/// `band` × its radius (at least half the mean length of the edges it crosses) on
-/// either side is cut out and each boundary closed by a cap
-/// started on the cone from the loop's saddle, moved with the boundary.
-pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Result<Cut> {
-    // 1. The band's two curves.
+/// The band's width the surface is refined for, as a fraction of the loop's radius
+/// (each side lies at least half an edge from the loop: with edges of a quarter of
+/// the radius, an eighth of it).
+const MIN_BAND: f64 = 0.125;
+
+/// Remove the class of `neck` (found on `surface`): the surface near the loop is
+/// refined until the loop crosses edges no longer than a quarter of its radius; the
+/// band between the curves at `band` × its radius (at least half the mean length of
+/// the edges it crosses) on either side is cut out and each boundary closed by a cap
+/// started on the cone from the loop's saddle, moved with the boundary, and faired as
+/// `fairing` says.
+pub fn cut_along_loop(
+    surface: &SurfaceMesh,
+    neck: &NeckLoop,
+    band: f64,
+    fairing: Fairing,
+) -> Result<Cut> {
+    // 1. The surface near the loop refined until the loop crosses edges no longer than
+    // a quarter of its radius, then the band's two curves on it.
+    let goal = band.max(MIN_BAND) * neck.radius;
+    let refined_within = 3.0 * goal;
+    let refined = refine_near(
+        surface,
+        &Topology::new(surface),
+        &loop_on_surface(neck),
+        neck.radius / 4.0,
+        refined_within,
+    )?;
+    let (curve, input) = (refined.curve, surface);
+    let surface = &refined.mesh;
     let topology = Topology::new(surface);
-    let curve = loop_on_surface(neck);
     // At least half an edge: a band much narrower than the triangles it crosses leaves
     // curves too close to the loop's vertices to be told apart.
-    let edges: Vec<f64> = neck
-        .surface_points
+    let edges: Vec<f64> = curve
         .iter()
         .filter_map(|p| match *p {
-            SurfacePoint::Edge { edge: [a, b], .. } => Some(norm(sub(
+            OnSurface::Edge { edge: [a, b], .. } => Some(norm(sub(
                 surface.positions[a as usize],
                 surface.positions[b as usize],
             ))),
-            SurfacePoint::Vertex { .. } => None,
+            OnSurface::Vertex(_) => None,
         })
         .collect();
     let mean_edge = edges.iter().sum::<f64>() / edges.len().max(1) as f64;
@@ -137,7 +164,11 @@ pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Resu
             .collect();
         let boundary: Vec<[f64; 3]> = ids.iter().map(|&v| positions[v as usize]).collect();
         let apex = add(neck.saddle, sub(centroid(&boundary), loop_centre));
-        let disk = cap(&boundary, apex, &CapOptions::default())?;
+        let options = CapOptions {
+            fairing,
+            ..CapOptions::default()
+        };
+        let disk = cap(&boundary, apex, &options)?;
         cap_areas[k] = disk.area;
         let first = positions.len() as u32;
         let n = ids.len() as u32;
@@ -157,14 +188,14 @@ pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Resu
         positions,
         triangles,
     });
-    // The refined surface keeps the input's vertices first, with their indices.
-    let mut vertex_map = vec![u32::MAX; surface.positions.len()];
+    // The refined surfaces keep the input's vertices first, with their indices.
+    let mut vertex_map = vec![u32::MAX; input.positions.len()];
     for (new, &old) in kept.iter().enumerate() {
         if let Some(slot) = vertex_map.get_mut(old as usize) {
             *slot = new as u32;
         }
     }
-    let volume_change = mesh.signed_volume() - surface.signed_volume();
+    let volume_change = mesh.signed_volume() - input.signed_volume();
     Ok(Cut {
         mesh,
         delta,
@@ -172,6 +203,8 @@ pub fn cut_along_loop(surface: &SurfaceMesh, neck: &NeckLoop, band: f64) -> Resu
         volume_change,
         vertex_map,
         cap_points,
+        fairing,
+        refined_within,
     })
 }
 
@@ -291,6 +324,12 @@ pub struct RepairLoop {
     pub center: [f64; 3],
 }
 
+impl From<&NeckLoop> for RepairLoop {
+    fn from(neck: &NeckLoop) -> RepairLoop {
+        RepairLoop::of(neck)
+    }
+}
+
 impl RepairLoop {
     fn of(neck: &NeckLoop) -> RepairLoop {
         RepairLoop {
@@ -311,6 +350,9 @@ pub struct RepairOperation {
     pub band_width: f64,
     /// The two caps' area.
     pub cap_area: f64,
+    /// How the caps were faired: `minimal_area`, or `harmonic` or `cone` where the
+    /// faired ones crossed the surface.
+    pub caps: Fairing,
     /// The enclosed volume's change.
     pub volume_change: f64,
     /// The largest distance from a cap's vertex to the input surface: how far the
@@ -400,6 +442,9 @@ pub fn repair_with_progress(
     let mut candidates = select(first.loops, options, 1);
     let mut operations = Vec::new();
     let mut skipped: Vec<RepairSkip> = Vec::new();
+    // Loops that crossed a band cut before them: reported unless the genus asked for
+    // was reached without them.
+    let mut crossed: Vec<RepairSkip> = Vec::new();
     let mut runs = 1;
     loop {
         // 3. One operation at a time.
@@ -410,15 +455,14 @@ pub fn repair_with_progress(
             if done(genus) {
                 break;
             }
-            let outcome = cut_along_loop(&current, &neck, options.band)
-                .map_err(|e| e.message().to_string())
-                .and_then(|cut| checked(cut, components, genus - 1));
+            let outcome = operate(&current, &neck, options.band, components, genus - 1);
             match outcome {
                 Ok(cut) => {
                     operations.push(RepairOperation {
                         neck: RepairLoop::of(&neck),
                         band_width: 2.0 * cut.delta,
                         cap_area: cut.cap_areas[0] + cut.cap_areas[1],
+                        caps: cut.fairing,
                         volume_change: cut.volume_change,
                         max_displacement: input_distance
                             .distances(&cut.cap_points)
@@ -429,33 +473,34 @@ pub fn repair_with_progress(
                     });
                     genus -= 1;
                     kept_this_run += 1;
-                    // The others carried onto the cut surface; those it disturbed wait
+                    // The others carried onto the cut surface. One that reaches the
+                    // band crosses the loop just cut: skipped (its class is gone when it
+                    // crossed it an odd number of times). Others the cut disturbed wait
                     // for the next run.
                     let edges = edge_set(&cut.mesh);
-                    let waiting: Vec<(NeckLoop, usize)> = queue.collect();
-                    let carried: Vec<(NeckLoop, usize)> = waiting
-                        .iter()
-                        .filter_map(|(other, r)| {
-                            carry(other, &cut.vertex_map, &edges).map(|m| (m, *r))
-                        })
-                        .collect();
-                    disturbed += waiting.len() - carried.len();
+                    let reach = cut.refined_within + cut.delta;
+                    let mut carried = Vec::new();
+                    for (other, r) in queue {
+                        if let Some(moved) = carry(&other, &cut.vertex_map, &edges) {
+                            carried.push((moved, r));
+                        } else if distance_between(&other.points, &neck.points) <= reach {
+                            skip(
+                                &mut crossed,
+                                &other,
+                                format!(
+                                    "it crosses the band of the {} loop of length {:.4e} removed before it: its class went with it (crossing it an odd number of times) or waits for a later loop run",
+                                    neck.kind.neck_name(),
+                                    neck.length
+                                ),
+                            );
+                        } else {
+                            disturbed += 1;
+                        }
+                    }
                     queue = carried.into_iter();
                     current = cut.mesh;
                 }
-                Err(reason) => {
-                    // The same loop found again by a later run is reported once.
-                    let same = |s: &RepairSkip| {
-                        s.neck.kind == neck.kind
-                            && (s.neck.loop_length - neck.length).abs() <= 1e-9 * neck.length
-                    };
-                    if !skipped.iter().any(same) {
-                        skipped.push(RepairSkip {
-                            neck: RepairLoop::of(&neck),
-                            reason,
-                        });
-                    }
-                }
+                Err(reason) => skip(&mut skipped, &neck, reason),
             }
         }
         // 4. Another run for the loops the cuts disturbed.
@@ -474,6 +519,11 @@ pub fn repair_with_progress(
         candidates = select(again.loops, options, runs);
         if candidates.is_empty() {
             break;
+        }
+    }
+    if !done(genus) {
+        for c in crossed {
+            skip(&mut skipped, c.neck, c.reason);
         }
     }
     let mut warnings = Vec::new();
@@ -552,6 +602,55 @@ fn select(loops: Vec<NeckLoop>, options: &RepairOptions, run: usize) -> Vec<(Nec
     chosen
 }
 
+/// Record that `neck` is not removed, and why; the same loop found again by a later
+/// run is reported once.
+fn skip(skipped: &mut Vec<RepairSkip>, neck: impl Into<RepairLoop>, reason: String) {
+    let neck = neck.into();
+    let same = |s: &RepairSkip| {
+        s.neck.kind == neck.kind
+            && (s.neck.loop_length - neck.loop_length).abs() <= 1e-9 * neck.loop_length
+    };
+    if !skipped.iter().any(same) {
+        skipped.push(RepairSkip { neck, reason });
+    }
+}
+
+/// The least distance from a point of `a` to the closed polyline `b`.
+fn distance_between(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let n = b.len();
+    a.iter()
+        .flat_map(|&p| {
+            (0..n).map(move |k| norm(sub(p, closest_on_segment(p, b[k], b[(k + 1) % n]))))
+        })
+        .fold(f64::MAX, f64::min)
+}
+
+/// Step 3: the cut along `neck`, checked; where its faired caps cross the surface,
+/// the harmonic caps, then the cones from the saddle, are tried (a cap that follows
+/// the membrane's cone bends less far from the neck).
+fn operate(
+    surface: &SurfaceMesh,
+    neck: &NeckLoop,
+    band: f64,
+    components: usize,
+    genus: i64,
+) -> std::result::Result<Cut, String> {
+    let mut outcome = Err(String::new());
+    for fairing in [Fairing::MinimalArea, Fairing::Harmonic, Fairing::Cone] {
+        outcome = cut_along_loop(surface, neck, band, fairing)
+            .map_err(|e| e.message().to_string())
+            .and_then(|cut| checked(cut, components, genus));
+        match &outcome {
+            Err(reason) if reason.starts_with(CROSSING) => continue,
+            _ => break,
+        }
+    }
+    outcome
+}
+
+/// The start of the reason a cut is refused for caps that cross the surface.
+const CROSSING: &str = "its caps cross the surface";
+
 /// Step 3's checks: the cut surface is a valid solid of the same components and genus
 /// `genus`, and does not cross itself.
 fn checked(cut: Cut, components: usize, genus: i64) -> std::result::Result<Cut, String> {
@@ -575,7 +674,7 @@ fn checked(cut: Cut, components: usize, genus: i64) -> std::result::Result<Cut, 
     let crossings = SurfaceDistance::new(&cut.mesh).self_intersections(&cut.mesh.triangles);
     if !crossings.is_empty() {
         return Err(format!(
-            "its caps cross the surface ({} pairs of triangles)",
+            "{CROSSING} ({} pairs of triangles), faired, harmonic or as cones",
             crossings.len()
         ));
     }

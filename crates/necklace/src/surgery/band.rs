@@ -34,7 +34,7 @@ impl OnSurface {
 }
 
 /// A crossing parameter this close to an end of its edge is that end's vertex.
-const SNAP: f64 = 1e-6;
+pub(super) const SNAP: f64 = 1e-6;
 
 /// Faces reached from the curve's own faces are in the band's region while one of their
 /// corners lies within this many `delta` of the curve.
@@ -124,17 +124,8 @@ fn segment_sides(
     let n = curve.len();
     (0..n)
         .map(|k| {
-            let (here, next) = (
-                faces_at(topology, &curve[k]),
-                faces_at(topology, &curve[(k + 1) % n]),
-            );
-            let face = here.iter().find(|f| next.contains(f)).ok_or_else(|| {
-                Error::invalid_argument(format!(
-                    "points {k} and {} of the loop share no triangle",
-                    (k + 1) % n
-                ))
-            })?;
-            let c = surface.corners(*face as usize);
+            let face = common_face(topology, &curve[k], &curve[(k + 1) % n], k)?;
+            let c = surface.corners(face as usize);
             let normal = cross(sub(c[1], c[0]), sub(c[2], c[0]));
             let side = cross(normal, sub(points[(k + 1) % n], points[k]));
             let length = norm(side);
@@ -145,6 +136,24 @@ fn segment_sides(
             })
         })
         .collect()
+}
+
+/// A triangle holding both `p` and `q` (points `k` and `k + 1` of a loop), or an error.
+pub(super) fn common_face(
+    topology: &Topology,
+    p: &OnSurface,
+    q: &OnSurface,
+    k: usize,
+) -> Result<u32> {
+    let next = faces_at(topology, q);
+    faces_at(topology, p)
+        .into_iter()
+        .find(|f| next.contains(f))
+        .ok_or_else(|| {
+            Error::invalid_argument(format!(
+                "point {k} of the loop and the next share no triangle"
+            ))
+        })
 }
 
 /// The closest point of the closed polyline to `p`: its distance and segment.

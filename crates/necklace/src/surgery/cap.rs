@@ -1,17 +1,33 @@
 //! The disk spanning a closed boundary polygon ([`cap`]).
 
+use serde::{Deserialize, Serialize};
+
 use crate::error::{Error, Result};
 use crate::geom::{add, cross, dot, norm, scale, sub};
 use crate::mesh::SurfaceMesh;
 
+/// How a cap is faired after it is built on the cone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Fairing {
+    /// A harmonic solve, then minimal-area steps (the default): the least area.
+    #[default]
+    MinimalArea,
+    /// The harmonic solve only (uniform weights, no fold).
+    Harmonic,
+    /// None: the cone from the apex as built.
+    Cone,
+}
+
 /// Options of [`cap`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CapOptions {
+    /// How the disk is faired (default [`Fairing::MinimalArea`]).
+    pub fairing: Fairing,
     /// Target edge length inside the disk, in the surface's units (default 0: the
     /// boundary's mean edge length).
     pub edge: f64,
-    /// Minimal-area steps after the harmonic solve (default 3; 0 keeps the harmonic
-    /// disk).
+    /// Most minimal-area steps after the harmonic solve (default 3).
     pub minimal_steps: usize,
     /// A solve stops when no vertex moves more than this fraction of the edge length in
     /// a sweep (default 1e-9).
@@ -23,6 +39,7 @@ pub struct CapOptions {
 impl Default for CapOptions {
     fn default() -> Self {
         CapOptions {
+            fairing: Fairing::MinimalArea,
             edge: 0.0,
             minimal_steps: 3,
             tolerance: 1e-9,
@@ -59,7 +76,7 @@ pub struct Cap {
 ///    fraction of its length, `1 − j/K` of the way out: the cone from `apex`.
 /// 2. Consecutive rings are zipped by parameter, the last one fanned to the centre
 ///    (`apex`): a disk by construction.
-/// 3. Fairing with the boundary fixed: a harmonic solve with uniform weights (no fold,
+/// 3. Fairing with the boundary fixed (as `options.fairing` says): a harmonic solve with uniform weights (no fold,
 ///    Tutte), then minimal-area steps (Pinkall–Polthier: cotangent weights of the
 ///    current shape, clamped to stay positive, and a Laplace solve), each kept only if
 ///    it lowers the area.
@@ -81,12 +98,18 @@ pub fn cap(boundary: &[[f64; 3]], apex: [f64; 3], options: &CapOptions) -> Resul
         .iter()
         .map(|n| n.iter().map(|&v| (v, 1.0)).collect())
         .collect();
-    let (s, c) = solve(&mut mesh.positions, &uniform, fixed, edge, options);
-    sweeps += s;
-    converged &= c;
+    if options.fairing != Fairing::Cone {
+        let (s, c) = solve(&mut mesh.positions, &uniform, fixed, edge, options);
+        sweeps += s;
+        converged &= c;
+    }
     let mut current = area(&mesh);
     let mut kept = 0;
-    for _ in 0..options.minimal_steps {
+    let steps = match options.fairing {
+        Fairing::MinimalArea => options.minimal_steps,
+        Fairing::Harmonic | Fairing::Cone => 0,
+    };
+    for _ in 0..steps {
         let weights = cotangent_weights(&mesh, &neighbours);
         let before = mesh.positions.clone();
         let (s, c) = solve(&mut mesh.positions, &weights, fixed, edge, options);

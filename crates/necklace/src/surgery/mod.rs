@@ -7,6 +7,8 @@
 //! - [`offset_curves`]: the two curves at signed distance ±δ from a loop, through the
 //!   surface, that bound the band a cut removes (marching triangles over the signed
 //!   distance to the loop, on the faces reached from it).
+//! - [`refine_near`]: the surface near a loop with its edges split until they are
+//!   short against the loop (edge bisection, conforming), and the loop carried onto it.
 //! - [`cap`]: the disk that closes a boundary left by a cut: concentric rings from the
 //!   boundary to a centre, about the local edge length apart, placed on the cone from a
 //!   point (the neck's saddle, as the plane-built membrane is) and then faired with the
@@ -19,6 +21,8 @@
 
 mod band;
 mod cap;
+mod refine;
 
 pub use band::{offset_curves, Offsets, OnSurface};
-pub use cap::{cap, Cap, CapOptions};
+pub use cap::{cap, Cap, CapOptions, Fairing};
+pub use refine::{refine_near, Refined};

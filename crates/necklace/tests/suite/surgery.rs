@@ -85,7 +85,13 @@ fn cutting_the_torus_through_its_handle_or_plugging_its_hole_leaves_a_valid_ball
     let volume = surface.signed_volume();
     for side in [Side::Inside, Side::Outside] {
         let neck = report.loops.iter().find(|l| l.kind == side).unwrap();
-        let cut = necklace::pipeline::cut_along_loop(surface, neck, 0.05).unwrap();
+        let cut = necklace::pipeline::cut_along_loop(
+            surface,
+            neck,
+            0.05,
+            necklace::surgery::Fairing::MinimalArea,
+        )
+        .unwrap();
         let r = necklace::MeshReport::new(&cut.mesh);
         assert!(r.is_valid_solid(), "{side:?}: {:?}", r.problems());
         assert_eq!(r.genus, vec![Some(0)], "{side:?}");
@@ -180,6 +186,56 @@ fn repair_by_length_removes_the_rings_handles_only_and_changes_nothing_else() {
     assert_eq!(necklace::MeshReport::new(&out).genus, vec![Some(0)]);
     // The caps lie inside the wires: nothing moves farther than the wire's radius.
     assert!(report.hausdorff < 1.5 * wire, "{}", report.hausdorff);
+}
+
+#[test]
+fn repair_takes_the_rings_to_genus_0_with_every_change_inside_a_ring() {
+    let shape = Shape::new(ShapeKind::Rings);
+    let (ring, wire) = (shape.param("ring"), shape.param("wire"));
+    let mesh = shape.mesh().unwrap();
+    let (out, report) = necklace::pipeline::repair(&mesh, &Default::default()).unwrap();
+    let count = shape.param("count") as usize;
+    assert_eq!(report.genus, [count as i64, 0]);
+    // Each ring's cheaper class is its wire's handle (a disk of the wire's section).
+    assert_eq!(report.operations.len(), count);
+    for op in &report.operations {
+        assert_eq!(op.neck.kind, Side::Inside);
+        assert!((op.cap_area / (2.0 * PI * wire * wire) - 1.0).abs() < 0.1);
+        assert!(op.max_displacement < 1.1 * wire, "{}", op.max_displacement);
+    }
+    let check = necklace::MeshReport::new(&out);
+    assert!(check.is_valid_solid(), "{:?}", check.problems());
+    assert_eq!(check.genus, vec![Some(0)]);
+    // Every point that moved lies within a ring: the rings' centres are on the ball,
+    // below their tunnels' centres.
+    let centres: Vec<[f64; 3]> = shape
+        .expected_necks()
+        .iter()
+        .filter(|n| n.kind == Side::Outside)
+        .filter_map(|n| n.center)
+        .map(|c| {
+            let s = shape.param("body") / norm(c);
+            [c[0] * s, c[1] * s, c[2] * s]
+        })
+        .collect();
+    assert_eq!(centres.len(), count);
+    let to_input = necklace::distance::SurfaceDistance::without_winding(&mesh);
+    let moved = out
+        .positions
+        .iter()
+        .zip(to_input.distances(&out.positions))
+        .filter(|(_, d)| *d > 1e-6 * mesh.bbox_diagonal())
+        .map(|(p, _)| *p)
+        .collect::<Vec<_>>();
+    assert!(!moved.is_empty());
+    for p in moved {
+        let near = centres
+            .iter()
+            .map(|&c| norm(sub(p, c)))
+            .fold(f64::MAX, f64::min);
+        assert!(near < ring + 2.0 * wire, "{p:?} is {near} from every ring");
+    }
+    assert!(report.hausdorff < 2.0 * wire, "{}", report.hausdorff);
 }
 
 #[test]
