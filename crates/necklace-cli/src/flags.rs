@@ -209,7 +209,7 @@ pub enum Command {
         only: Option<OnlyArg>,
         /// Each side of the band a cut removes lies this fraction of the loop's radius
         /// from it.
-        #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
         band: f64,
         /// Draw the input and the output side by side, the removed loops marked, into
         /// DIR/repair.png.

@@ -528,7 +528,7 @@ def repair(
     genus: Optional[int] = None,
     max_length: Optional[float] = None,
     only: Optional[str] = None,
-    band: float = 0.05,
+    band: float = 0.15,
     progress: Optional[Callable[[str, int, int], Any]] = None,
     **options: Any,
 ) -> Tuple[np.ndarray, np.ndarray, Dict[str, Any]]:

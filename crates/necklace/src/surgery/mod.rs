@@ -1,8 +1,8 @@
 //! Surgery on a closed surface along its neck loops: removing a handle by cutting the
 //! solid through its neck, or a tunnel by plugging the hole (issue 41; the paper's
-//! sec. 1 names topology repair among the loops' uses). **In progress**: this module
-//! holds the band's curves and the caps so far; the band cut along a loop, the checks and the choice of loops
-//! follow (`docs/design-repair.md`).
+//! sec. 1 names topology repair among the loops' uses). This module holds the pieces of
+//! one operation; `pipeline::repairing` cuts the band out (with `segment`), checks the
+//! result and chooses the loops (`docs/design-repair.md`).
 //!
 //! - [`offset_curves`]: the two curves at signed distance ±δ from a loop, through the
 //!   surface, that bound the band a cut removes (marching triangles over the signed

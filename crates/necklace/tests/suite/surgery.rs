@@ -146,18 +146,26 @@ fn repair_takes_the_torus_to_genus_0_by_its_cheaper_cut_or_by_a_plug_of_the_hole
                 );
                 assert!(-op.volume_change / report.volume[0] < 0.02);
             }
-            // The plug fills the hole's disk, 2δ thick.
+            // The plug fills the hole between heights ±δ: its section at height z is
+            // the disk of radius R − √(r² − z²); the caps are those at ±δ.
             _ => {
                 assert_eq!(op.neck.kind, Side::Outside);
-                let disk = PI * (big_r - r) * (big_r - r);
+                let disk = |z: f64| PI * (big_r - (r * r - z * z).sqrt()).powi(2);
                 assert!(
-                    (op.cap_area / (2.0 * disk) - 1.0).abs() < 0.05,
+                    (op.cap_area / (2.0 * disk(delta)) - 1.0).abs() < 0.05,
                     "{}",
                     op.cap_area
                 );
+                let steps = 100;
+                let plug: f64 = (0..steps)
+                    .map(|i| disk(-delta + (i as f64 + 0.5) * 2.0 * delta / steps as f64))
+                    .sum::<f64>()
+                    * 2.0
+                    * delta
+                    / steps as f64;
                 assert!(
-                    (op.volume_change / (2.0 * delta * disk) - 1.0).abs() < 0.05,
-                    "{}",
+                    (op.volume_change / plug - 1.0).abs() < 0.05,
+                    "{} for {plug}",
                     op.volume_change
                 );
             }
