@@ -188,7 +188,7 @@ pub enum Command {
         #[arg(long)]
         save_run: Option<PathBuf>,
     },
-    /// Remove handles and tunnels along their neck loops (issue 41, first version):
+    /// Remove handles and tunnels along their neck loops:
     /// a handle is cut through along a thin band round its loop, a tunnel's hole plugged,
     /// each opening closed by faired caps; loops shortest first, each operation checked
     /// (a valid solid, the genus one lower, no crossings) or skipped with its reason.

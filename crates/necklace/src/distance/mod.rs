@@ -428,6 +428,87 @@ impl SurfaceDistance {
     }
 }
 
+/// The crossing pairs of `mesh`'s faces (as [`SurfaceDistance::self_intersections`]
+/// counts them, the same tolerance of the whole mesh's diagonal) that involve a face of
+/// `among`: the check after an edit that added only those faces to a surface that did
+/// not cross itself, for the cost of a tree over them and one pass over the rest.
+/// Sorted, each pair `[lower, higher]`; the result does not depend on the thread count.
+pub fn crossings_among(mesh: &SurfaceMesh, among: &[u32]) -> Vec<[u32; 2]> {
+    let n = mesh.positions.len();
+    let corners = |f: u32| -> Option<[[f64; 3]; 3]> {
+        let t = mesh.triangles.get(f as usize)?;
+        let c = t.map(|v| mesh.positions.get(v as usize).copied());
+        let c = [c[0]?, c[1]?, c[2]?];
+        c.iter().flatten().all(|x| x.is_finite()).then_some(c)
+    };
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in mesh
+        .positions
+        .iter()
+        .filter(|p| p.iter().all(|x| x.is_finite()))
+    {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let tolerance = CROSSING_TOLERANCE * if n == 0 { 0.0 } else { norm(sub(hi, lo)) };
+    let mut chosen = vec![false; mesh.triangles.len()];
+    let (mut tris, mut faces) = (Vec::new(), Vec::new());
+    for &f in among {
+        if let (Some(c), Some(slot)) = (corners(f), chosen.get_mut(f as usize)) {
+            if !*slot {
+                *slot = true;
+                tris.push(c);
+                faces.push(f);
+            }
+        }
+    }
+    let tree = Bvh::build(tris, faces);
+    let Some(root) = tree.nodes.first() else {
+        return Vec::new();
+    };
+    let (root_lo, root_hi) = (root.lo, root.hi);
+    let mut pairs: Vec<[u32; 2]> = (0..mesh.triangles.len() as u32)
+        .into_par_iter()
+        .map_init(Vec::new, |candidates, f| {
+            let Some(tri) = corners(f) else {
+                return Vec::new();
+            };
+            let (mut a, mut b) = (tri[0], tri[0]);
+            for p in tri {
+                for k in 0..3 {
+                    a[k] = a[k].min(p[k]);
+                    b[k] = b[k].max(p[k]);
+                }
+            }
+            if (0..3).any(|k| b[k] < root_lo[k] || a[k] > root_hi[k]) {
+                return Vec::new();
+            }
+            candidates.clear();
+            tree.overlapping(a, b, candidates);
+            let vf = mesh.triangles[f as usize];
+            candidates
+                .iter()
+                .map(|&j| (j, tree.faces[j]))
+                // A pair of two chosen faces is seen from both: kept from the lower.
+                .filter(|&(_, g)| g != f && !(chosen[f as usize] && g < f))
+                .filter(|&(_, g)| !mesh.triangles[g as usize].iter().any(|v| vf.contains(v)))
+                .filter(|&(j, _)| bvh::triangles_cross(&tri, &tree.tris[j]))
+                .filter(|&(j, _)| {
+                    crossing_segment(tri, tree.tris[j])
+                        .is_some_and(|[p, q]| norm(sub(p, q)) > tolerance)
+                })
+                .map(|(_, g)| [f.min(g), f.max(g)])
+                .collect::<Vec<_>>()
+        })
+        .flatten()
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
+}
+
 /// Two triangles cross (see [`SurfaceDistance::self_intersections`]) when they meet
 /// along a segment longer than this fraction of the bounding-box diagonal.
 pub const CROSSING_TOLERANCE: f64 = 1e-9;
@@ -555,6 +636,39 @@ mod tests {
         let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let b = [[0.2, 0.2, -0.5], [0.2, 0.2, 0.5], [0.9, 0.9, 0.0]];
         assert!(crossing_segment(a, b).is_some());
+    }
+
+    /// Two tetrahedra, the second moved half into the first: the crossings that involve
+    /// a set of faces are those of the whole surface's crossings with a face in it.
+    #[test]
+    fn crossings_among_faces_are_the_surfaces_crossings_that_involve_them() {
+        let mut mesh = tetra();
+        let moved = tetra();
+        mesh.positions
+            .extend(moved.positions.iter().map(|p| add(*p, [0.3, 0.25, 0.2])));
+        mesh.triangles
+            .extend(moved.triangles.iter().map(|t| t.map(|v| v + 4)));
+        let all = SurfaceDistance::without_winding(&mesh).self_intersections(&mesh.triangles);
+        assert!(!all.is_empty());
+        for among in [
+            vec![0, 1, 2, 3, 4, 5, 6, 7],
+            vec![4, 5, 6, 7],
+            vec![1],
+            vec![6, 6, 2],
+        ] {
+            let expected: Vec<[u32; 2]> = all
+                .iter()
+                .filter(|p| p.iter().any(|f| among.contains(f)))
+                .copied()
+                .collect();
+            assert_eq!(crossings_among(&mesh, &among), expected, "{among:?}");
+        }
+        // Apart, nothing crosses.
+        for p in &mut mesh.positions[4..] {
+            p[0] += 5.0;
+        }
+        assert!(crossings_among(&mesh, &[0, 1, 2, 3, 4, 5, 6, 7]).is_empty());
+        assert!(crossings_among(&mesh, &[]).is_empty());
     }
 
     #[test]

@@ -13,11 +13,12 @@
 //! 2. The candidates: the loops of the kinds asked for that do not separate the
 //!    surface (and, with a length bound, the shorter ones), shortest first (a cap's area grows with its loop's length squared,
 //!    so this is cheapest first).
-//! 3. One at a time: the operation (the surface refined near the loop; its caps
+//! 3. One at a time: the operation (the surface refined near a coarse loop; its caps
 //!    faired to the least area, or harmonic, then cones from the saddle, where those
 //!    cross the surface), then its checks — a valid closed solid, the same components,
 //!    the genus one lower (a class that depends on removed ones would cut a part off or
-//!    enclose a cavity), no crossings. A failed check skips the loop with its reason; a
+//!    enclose a cavity), no crossings (of the caps' triangles: the rest lies in the
+//!    input's, which did not cross). A failed check skips the loop with its reason; a
 //!    kept one replaces the surface, and the other candidates are carried onto it where
 //!    the cut left their edges alone. One that crosses the band is skipped with that
 //!    reason (reported unless the genus asked for is reached without it).
@@ -30,14 +31,14 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::NeckOptions;
-use crate::distance::SurfaceDistance;
+use crate::distance::{crossings_among, SurfaceDistance};
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, closest_on_segment, norm, scale, sub};
 use crate::loops::{NeckLoop, SurfacePoint};
 use crate::mesh::{remove_unreferenced, MeshReport, Side, SurfaceMesh, Topology};
 use crate::progress::{Progress, Silent};
 use crate::segment::{segment, CurvePoint};
-use crate::surgery::{cap, offset_curves, refine_near, CapOptions, Fairing, OnSurface};
+use crate::surgery::{cap, offset_curves, refine_near, CapOptions, Fairing, OnSurface, Refined};
 
 /// What [`cut_along_loop`] did.
 #[derive(Debug, Clone, PartialEq)]
@@ -55,9 +56,12 @@ pub struct Cut {
     pub vertex_map: Vec<u32>,
     /// The caps' vertices off their boundaries (the new points of the surface).
     pub cap_points: Vec<[f64; 3]>,
+    /// The caps' triangles are `mesh.triangles[caps_from..]`; the others lie in the
+    /// input's triangles.
+    pub caps_from: usize,
     /// How the caps were faired.
     pub fairing: Fairing,
-    /// The surface was refined within this distance of the loop.
+    /// The surface was refined within this distance of the loop (0: not refined).
     pub refined_within: f64,
 }
 
@@ -66,8 +70,20 @@ pub struct Cut {
 /// the radius, an eighth of it).
 const MIN_BAND: f64 = 0.125;
 
-/// Remove the class of `neck` (found on `surface`): the surface near the loop is
-/// refined until the loop crosses edges no longer than a quarter of its radius; the
+/// Each side of the band lies at least this fraction of the mean length of the edges
+/// the loop crosses from it. (At half an edge, bands on the coarse wires of a wire
+/// sphere were wider than a wire, and no window could be plugged.)
+const MIN_BAND_EDGES: f64 = 0.1;
+
+/// A loop of fewer points than this is coarse: its surface is refined before the cut (a
+/// boot's eyelet crosses 15 edges, each twice its radius). A finer loop is cut on the
+/// surface as it is: refining a wire sphere's wires, whose loops cross 55–62 edges up
+/// to three times their radius long, multiplies the cut's triangles and its caps' size.
+const COARSE_LOOP: usize = 24;
+
+/// Remove the class of `neck` (found on `surface`): where the loop is coarse (fewer
+/// than [`COARSE_LOOP`] points) the surface near it is refined until the loop crosses
+/// edges no longer than a quarter of its radius; the
 /// band between the curves at `band` × its radius (at least half the mean length of
 /// the edges it crosses) on either side is cut out and each boundary closed by a cap
 /// started on the cone from the loop's saddle, moved with the boundary, and faired as
@@ -78,22 +94,34 @@ pub fn cut_along_loop(
     band: f64,
     fairing: Fairing,
 ) -> Result<Cut> {
-    // 1. The surface near the loop refined until the loop crosses edges no longer than
-    // a quarter of its radius, then the band's two curves on it.
-    let goal = band.max(MIN_BAND) * neck.radius;
-    let refined_within = 3.0 * goal;
-    let refined = refine_near(
-        surface,
-        &Topology::new(surface),
-        &loop_on_surface(neck),
-        neck.radius / 4.0,
-        refined_within,
-    )?;
+    // 1. A coarse loop: the surface near it refined until the loop crosses edges no
+    // longer than a quarter of its radius. Then the band's two curves.
+    let coarse = neck.surface_points.len() < COARSE_LOOP;
+    let refined_within = if coarse {
+        3.0 * band.max(MIN_BAND) * neck.radius
+    } else {
+        0.0
+    };
+    let refined = if coarse {
+        refine_near(
+            surface,
+            &Topology::new(surface),
+            &loop_on_surface(neck),
+            neck.radius / 4.0,
+            refined_within,
+        )?
+    } else {
+        Refined {
+            mesh: surface.clone(),
+            curve: loop_on_surface(neck),
+            splits: 0,
+        }
+    };
     let (curve, input) = (refined.curve, surface);
     let surface = &refined.mesh;
     let topology = Topology::new(surface);
-    // At least half an edge: a band much narrower than the triangles it crosses leaves
-    // curves too close to the loop's vertices to be told apart.
+    // At least a tenth of an edge: a band much narrower than the triangles it crosses
+    // leaves curves too close to the loop's vertices to be told apart.
     let edges: Vec<f64> = curve
         .iter()
         .filter_map(|p| match *p {
@@ -105,7 +133,7 @@ pub fn cut_along_loop(
         })
         .collect();
     let mean_edge = edges.iter().sum::<f64>() / edges.len().max(1) as f64;
-    let delta = (band * neck.radius).max(0.5 * mean_edge);
+    let delta = (band * neck.radius).max(MIN_BAND_EDGES * mean_edge);
     let offsets = offset_curves(surface, &topology, &curve, delta)?;
 
     // 2. The surface cut along them; the band is the annulus between them.
@@ -127,12 +155,7 @@ pub fn cut_along_loop(
         .iter()
         .filter(|s| s.euler == 0 && s.boundaries == 2 && s.loops.len() == 2)
         .min_by(|a, b| a.area.total_cmp(&b.area))
-        .ok_or_else(|| {
-            Error::new(
-                ErrorKind::InvalidMesh,
-                "the band round the loop is not an annulus between its two curves",
-            )
-        })?
+        .ok_or_else(|| Error::new(ErrorKind::InvalidMesh, NO_ANNULUS))?
         .id as u32;
     let kept: Vec<[u32; 3]> = cut
         .mesh
@@ -159,6 +182,7 @@ pub fn cut_along_loop(
     let mut triangles = kept;
     let mut cap_areas = [0.0; 2];
     let mut cap_points = Vec::new();
+    let caps_from = triangles.len();
     for (k, cycle) in cycles.iter().enumerate() {
         // The cap runs each boundary edge the other way from the surface beside it.
         let ids: Vec<u32> = std::iter::once(cycle[0])
@@ -205,6 +229,7 @@ pub fn cut_along_loop(
         volume_change,
         vertex_map,
         cap_points,
+        caps_from,
         fairing,
         refined_within,
     })
@@ -633,7 +658,9 @@ fn distance_between(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 
 /// Step 3: the cut along `neck`, checked; where its faired caps cross the surface,
 /// the harmonic caps, then the cones from the saddle, are tried (a cap that follows
-/// the membrane's cone bends less far from the neck).
+/// the membrane's cone bends less far from the neck); where the band's curves are not
+/// found or do not bound an annulus (a tunnel round a window of thin wires: the band
+/// is wider than a wire), the band is narrowed to a half, then a quarter.
 fn operate(
     surface: &SurfaceMesh,
     neck: &NeckLoop,
@@ -642,17 +669,29 @@ fn operate(
     genus: i64,
 ) -> std::result::Result<Cut, String> {
     let mut outcome = Err(String::new());
-    for fairing in [Fairing::MinimalArea, Fairing::Harmonic, Fairing::Cone] {
-        outcome = cut_along_loop(surface, neck, band, fairing)
-            .map_err(|e| e.message().to_string())
-            .and_then(|cut| checked(cut, components, genus));
-        match &outcome {
-            Err(reason) if reason.starts_with(CROSSING) => continue,
-            _ => break,
+    'bands: for narrowed in [band, band / 2.0, band / 4.0] {
+        for fairing in [Fairing::MinimalArea, Fairing::Harmonic, Fairing::Cone] {
+            outcome = cut_along_loop(surface, neck, narrowed, fairing)
+                .map_err(|e| e.message().to_string())
+                .and_then(|cut| checked(cut, components, genus));
+            match &outcome {
+                Err(reason) if reason.starts_with(CROSSING) => continue,
+                Err(reason) if reason.starts_with(NO_CURVE) || reason.starts_with(NO_ANNULUS) => {
+                    continue 'bands
+                }
+                _ => break 'bands,
+            }
         }
+        break;
     }
     outcome
 }
+
+/// The start of the reason a band's curves were not found (`surgery::offset_curves`).
+const NO_CURVE: &str = "no closed curve at distance";
+
+/// The reason the band's curves do not bound an annulus.
+const NO_ANNULUS: &str = "the band round the loop is not an annulus between its two curves";
 
 /// The start of the reason a cut is refused for caps that cross the surface.
 const CROSSING: &str = "its caps cross the surface";
@@ -677,7 +716,10 @@ fn checked(cut: Cut, components: usize, genus: i64) -> std::result::Result<Cut, 
     if found != genus {
         return Err(format!("the cut leaves genus {found}, not {genus}"));
     }
-    let crossings = SurfaceDistance::new(&cut.mesh).self_intersections(&cut.mesh.triangles);
+    // The rest lies in the input's triangles (split in their planes), which did not
+    // cross: only the caps can.
+    let caps: Vec<u32> = (cut.caps_from as u32..cut.mesh.triangles.len() as u32).collect();
+    let crossings = crossings_among(&cut.mesh, &caps);
     if !crossings.is_empty() {
         return Err(format!(
             "{CROSSING} ({} pairs of triangles), faired, harmonic or as cones",

@@ -65,8 +65,9 @@ pub struct Offsets {
 ///    closest point, signed by the side direction of the segment holding that point.
 /// 4. Marching triangles at `+delta` and `−delta` over the region; the crossings are
 ///    chained across shared edges, and the longest closed chain of each sign is its
-///    curve (small rings round bumps are dropped). A sign with no closed chain is an
-///    error: the region ends before the distance is reached.
+///    curve (small rings round bumps are dropped). A sign with no closed chain at least
+///    half as long as the curve is an error: the region ends before the distance is
+///    reached, or the band reaches round a thin part.
 pub fn offset_curves(
     surface: &SurfaceMesh,
     topology: &Topology,
@@ -79,13 +80,25 @@ pub fn offset_curves(
             curve.len()
         )));
     }
+    let curve = &snapped(curve);
+    if curve.len() < 3 {
+        return Err(Error::invalid_argument(format!(
+            "offset curves need a closed curve of at least 3 distinct points (got {})",
+            curve.len()
+        )));
+    }
     let points: Vec<[f64; 3]> = curve.iter().map(|p| p.position(surface)).collect();
     let segments = segment_sides(surface, topology, curve, &points)?;
     let seeds: Vec<u32> = curve.iter().flat_map(|p| faces_at(topology, p)).collect();
     let (region, signed) = region(surface, topology, &seeds, &points, &segments, delta);
+    // A chain under half the curve's length is a ring round a bump, not the band's side.
+    let n = points.len();
+    let length: f64 = (0..n)
+        .map(|k| norm(sub(points[(k + 1) % n], points[k])))
+        .sum();
     let mut curves = [Vec::new(), Vec::new()];
     for (k, level) in [delta, -delta].into_iter().enumerate() {
-        curves[k] = longest_isoline(surface, &region, &signed, level).ok_or_else(|| {
+        curves[k] = longest_isoline(surface, &region, &signed, level, 0.5 * length).ok_or_else(|| {
             Error::invalid_argument(format!(
                 "no closed curve at distance {level:.3e} from the loop: the surface ends, or the loop's band reaches past a neighbouring part"
             ))
@@ -113,8 +126,57 @@ fn faces_at(topology: &Topology, p: &OnSurface) -> Vec<u32> {
     }
 }
 
+/// `curve` with each point within [`SNAP`] of an end of its edge on that vertex, and
+/// repeated points merged (a loop tightened along a crease runs along its edges,
+/// crossing each a hair from its ends).
+fn snapped(curve: &[OnSurface]) -> Vec<OnSurface> {
+    let mut out: Vec<OnSurface> = Vec::with_capacity(curve.len());
+    for &p in curve {
+        let p = match p {
+            OnSurface::Edge { edge: [a, _], t } if t < SNAP => OnSurface::Vertex(a),
+            OnSurface::Edge { edge: [_, b], t } if t > 1.0 - SNAP => OnSurface::Vertex(b),
+            p => p,
+        };
+        if out.last() != Some(&p) {
+            out.push(p);
+        }
+    }
+    while out.len() > 1 && out.first() == out.last() {
+        out.pop();
+    }
+    out
+}
+
+/// The mesh edge both points lie on, if any.
+fn common_edge(topology: &Topology, p: &OnSurface, q: &OnSurface) -> Option<usize> {
+    let edge = |a: u32, b: u32| {
+        topology
+            .vertex_edges(a as usize)
+            .iter()
+            .map(|&e| e as usize)
+            .find(|&e| topology.edges()[e] == [a.min(b), a.max(b)])
+    };
+    match (*p, *q) {
+        (OnSurface::Vertex(a), OnSurface::Vertex(b)) => edge(a, b),
+        (OnSurface::Vertex(v), OnSurface::Edge { edge: [a, b], .. })
+        | (OnSurface::Edge { edge: [a, b], .. }, OnSurface::Vertex(v))
+            if v == a || v == b =>
+        {
+            edge(a, b)
+        }
+        (OnSurface::Edge { edge: e, .. }, OnSurface::Edge { edge: f, .. })
+            if [e[0].min(e[1]), e[0].max(e[1])] == [f[0].min(f[1]), f[0].max(f[1])] =>
+        {
+            edge(e[0], e[1])
+        }
+        _ => None,
+    }
+}
+
 /// Per segment `k` (point `k` to `k + 1`): its side direction (unit face normal ×
-/// segment direction), or an error when the two points share no face.
+/// segment direction; for a segment along an edge, the sum of its faces' unit normals ×
+/// the direction, which points into the left face and away from the right one even
+/// where the edge is a crease), or an error when the two points share no face.
 fn segment_sides(
     surface: &SurfaceMesh,
     topology: &Topology,
@@ -124,9 +186,24 @@ fn segment_sides(
     let n = curve.len();
     (0..n)
         .map(|k| {
-            let face = common_face(topology, &curve[k], &curve[(k + 1) % n], k)?;
-            let c = surface.corners(face as usize);
-            let normal = cross(sub(c[1], c[0]), sub(c[2], c[0]));
+            let (p, q) = (&curve[k], &curve[(k + 1) % n]);
+            let unit_normal = |f: u32| {
+                let c = surface.corners(f as usize);
+                let normal = cross(sub(c[1], c[0]), sub(c[2], c[0]));
+                let length = norm(normal);
+                if length > 0.0 {
+                    scale(normal, 1.0 / length)
+                } else {
+                    [0.0; 3]
+                }
+            };
+            let normal = match common_edge(topology, p, q) {
+                Some(e) => topology
+                    .edge_faces(e)
+                    .iter()
+                    .fold([0.0; 3], |sum, &f| add(sum, unit_normal(f))),
+                None => unit_normal(common_face(topology, p, q, k)?),
+            };
             let side = cross(normal, sub(points[(k + 1) % n], points[k]));
             let length = norm(side);
             Ok(if length > 0.0 {
@@ -234,12 +311,14 @@ fn region(
     (faces, signed)
 }
 
-/// Step 4: the longest closed isoline at `level` over the region's faces.
+/// Step 4: the longest closed isoline at `level` over the region's faces, if it is at
+/// least `min_length` long.
 fn longest_isoline(
     surface: &SurfaceMesh,
     region: &[u32],
     signed: &HashMap<u32, f64>,
     level: f64,
+    min_length: f64,
 ) -> Option<Vec<OnSurface>> {
     // One crossing per edge, found from either of its faces alike.
     let mut crossing: BTreeMap<[u32; 2], usize> = BTreeMap::new();
@@ -318,7 +397,7 @@ fn longest_isoline(
             best = Some((length, chain));
         }
     }
-    let (_, chain) = best?;
+    let (_, chain) = best.filter(|(length, _)| *length >= min_length)?;
     let mut out: Vec<OnSurface> = Vec::with_capacity(chain.len());
     for i in chain {
         let (edge, t) = points[i];
@@ -391,6 +470,53 @@ mod tests {
                 assert!((q[2] - z).abs() < 1e-9, "{q:?} not at z = {z}");
                 assert!(((q[0] * q[0] + q[1] * q[1]).sqrt() - 1.0).abs() < 0.01);
             }
+        }
+    }
+
+    /// The tube above z = 0 meets a flat annulus at a right-angled crease along row 20;
+    /// the curve runs along the crease's edges a hair from their ends, each vertex
+    /// passed twice (as a loop tightened along a CAD part's rim does). Its sides are the
+    /// tube (`+delta`, at z = delta) and the annulus (`−delta`, at radius 1 + delta).
+    #[test]
+    fn a_curve_along_a_crease_has_its_offsets_on_the_two_faces_of_the_crease() {
+        let nt = 40;
+        let mut mesh = tube(nt, &rows());
+        for j in 0..20 {
+            for i in 0..nt {
+                let a = 2.0 * PI * i as f64 / nt as f64;
+                let r = 1.0 + 0.1 * (20 - j) as f64;
+                mesh.positions[j * nt + i] = [r * a.cos(), r * a.sin(), 0.0];
+            }
+        }
+        let topology = Topology::new(&mesh);
+        let v = |i: usize| (20 * nt + i % nt) as u32;
+        let curve: Vec<OnSurface> = (0..nt)
+            .flat_map(|i| {
+                [
+                    OnSurface::Edge {
+                        edge: [v(i), v(i + 1)],
+                        t: 1e-7,
+                    },
+                    OnSurface::Edge {
+                        edge: [v(i), v(i + 1)],
+                        t: 1.0 - 3e-7,
+                    },
+                ]
+            })
+            .collect();
+        let offsets = offset_curves(&mesh, &topology, &curve, 0.25).unwrap();
+        for p in &offsets.curves[0] {
+            let q = p.position(&mesh);
+            let r = (q[0] * q[0] + q[1] * q[1]).sqrt();
+            assert!(
+                (q[2] - 0.25).abs() < 1e-9 && (r - 1.0).abs() < 0.01,
+                "{q:?}"
+            );
+        }
+        for p in &offsets.curves[1] {
+            let q = p.position(&mesh);
+            let r = (q[0] * q[0] + q[1] * q[1]).sqrt();
+            assert!(q[2].abs() < 1e-9 && (r - 1.25).abs() < 0.01, "{q:?}");
         }
     }
 

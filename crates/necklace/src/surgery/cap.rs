@@ -29,11 +29,11 @@ pub struct CapOptions {
     pub edge: f64,
     /// Most minimal-area steps after the harmonic solve (default 3).
     pub minimal_steps: usize,
-    /// A solve stops when no vertex moves more than this fraction of the edge length in
-    /// a sweep (default 1e-9).
+    /// A solve stops when no vertex's Jacobi correction (its residual over its weight)
+    /// exceeds this fraction of the edge length (default 1e-9).
     pub tolerance: f64,
-    /// Most Gauss–Seidel sweeps per solve (default 5000).
-    pub max_sweeps: usize,
+    /// Most conjugate-gradient iterations per solve (default 5000).
+    pub max_iterations: usize,
 }
 
 impl Default for CapOptions {
@@ -43,7 +43,7 @@ impl Default for CapOptions {
             edge: 0.0,
             minimal_steps: 3,
             tolerance: 1e-9,
-            max_sweeps: 5000,
+            max_iterations: 5000,
         }
     }
 }
@@ -58,9 +58,9 @@ pub struct Cap {
     pub area: f64,
     /// The area of the cone it started from.
     pub cone_area: f64,
-    /// Gauss–Seidel sweeps over all solves.
-    pub sweeps: usize,
-    /// Whether every solve met the tolerance within `max_sweeps`.
+    /// Conjugate-gradient iterations over all solves.
+    pub iterations: usize,
+    /// Whether every solve met the tolerance within `max_iterations`.
     pub converged: bool,
     /// Minimal-area steps kept (a step that does not lower the area is undone and ends
     /// them).
@@ -92,7 +92,7 @@ pub fn cap(boundary: &[[f64; 3]], apex: [f64; 3], options: &CapOptions) -> Resul
     let cone_area = area(&mesh);
     let neighbours = neighbours(&mesh);
     let fixed = boundary.len();
-    let mut sweeps = 0;
+    let mut iterations = 0;
     let mut converged = true;
     let uniform: Vec<Vec<(u32, f64)>> = neighbours
         .iter()
@@ -100,7 +100,7 @@ pub fn cap(boundary: &[[f64; 3]], apex: [f64; 3], options: &CapOptions) -> Resul
         .collect();
     if options.fairing != Fairing::Cone {
         let (s, c) = solve(&mut mesh.positions, &uniform, fixed, edge, options);
-        sweeps += s;
+        iterations += s;
         converged &= c;
     }
     let mut current = area(&mesh);
@@ -113,7 +113,7 @@ pub fn cap(boundary: &[[f64; 3]], apex: [f64; 3], options: &CapOptions) -> Resul
         let weights = cotangent_weights(&mesh, &neighbours);
         let before = mesh.positions.clone();
         let (s, c) = solve(&mut mesh.positions, &weights, fixed, edge, options);
-        sweeps += s;
+        iterations += s;
         let after = area(&mesh);
         if after >= current {
             mesh.positions = before;
@@ -127,7 +127,7 @@ pub fn cap(boundary: &[[f64; 3]], apex: [f64; 3], options: &CapOptions) -> Resul
         mesh,
         area: current,
         cone_area,
-        sweeps,
+        iterations,
         converged,
         minimal_steps: kept,
     })
@@ -287,8 +287,14 @@ fn cotangent_weights(mesh: &SurfaceMesh, neighbours: &[Vec<u32>]) -> Vec<Vec<(u3
             *weight.entry((a.min(b), a.max(b))).or_default() += 0.5 * cot;
         }
     }
-    let positive: Vec<f64> = weight.values().copied().filter(|w| *w > 0.0).collect();
-    let mean = positive.iter().sum::<f64>() / positive.len().max(1) as f64;
+    // Summed in the order of the edges, not the map's (the same input, the same cap).
+    let mut positive: Vec<((u32, u32), f64)> = weight
+        .iter()
+        .filter(|(_, w)| **w > 0.0)
+        .map(|(e, w)| (*e, *w))
+        .collect();
+    positive.sort_unstable_by_key(|(e, _)| *e);
+    let mean = positive.iter().map(|(_, w)| w).sum::<f64>() / positive.len().max(1) as f64;
     let floor = 0.05 * mean.max(f64::MIN_POSITIVE);
     neighbours
         .iter()
@@ -302,8 +308,11 @@ fn cotangent_weights(mesh: &SurfaceMesh, neighbours: &[Vec<u32>]) -> Vec<Vec<(u3
         .collect()
 }
 
-/// Gauss–Seidel on the weighted Laplace equation, vertices from `fixed` on free:
-/// sweeps and whether it met the tolerance.
+/// The weighted Laplace equation `Σ_u w_vu (x_v − x_u) = 0` at the vertices from
+/// `fixed` on, the others fixed, by conjugate gradients with the Jacobi preconditioner
+/// from the current positions (the weights are symmetric and positive: the matrix is
+/// symmetric positive definite). Returns the iterations and whether it met the
+/// tolerance.
 fn solve(
     positions: &mut [[f64; 3]],
     weights: &[Vec<(u32, f64)>],
@@ -311,22 +320,89 @@ fn solve(
     edge: f64,
     options: &CapOptions,
 ) -> (usize, bool) {
-    for sweep in 1..=options.max_sweeps {
-        let mut largest: f64 = 0.0;
-        for v in fixed..positions.len() {
-            let total: f64 = weights[v].iter().map(|(_, w)| w).sum();
-            let mut mean = [0.0; 3];
-            for &(u, w) in &weights[v] {
-                mean = add(mean, scale(positions[u as usize], w / total));
-            }
-            largest = largest.max(norm(sub(mean, positions[v])));
-            positions[v] = mean;
-        }
-        if largest <= options.tolerance * edge {
-            return (sweep, true);
-        }
+    let free = positions.len().saturating_sub(fixed);
+    if free == 0 {
+        return (0, true);
     }
-    (options.max_sweeps, false)
+    let diagonal: Vec<f64> = (fixed..positions.len())
+        .map(|v| weights[v].iter().map(|(_, w)| w).sum())
+        .collect();
+    // The matrix on the free vertices times `x`.
+    let apply = |x: &[[f64; 3]], out: &mut [[f64; 3]]| {
+        for (i, o) in out.iter_mut().enumerate() {
+            let mut sum = scale(x[i], diagonal[i]);
+            for &(u, w) in &weights[fixed + i] {
+                if u as usize >= fixed {
+                    sum = sub(sum, scale(x[u as usize - fixed], w));
+                }
+            }
+            *o = sum;
+        }
+    };
+    let columns = |a: &[[f64; 3]], b: &[[f64; 3]]| {
+        let mut d = [0.0; 3];
+        for (p, q) in a.iter().zip(b) {
+            for k in 0..3 {
+                d[k] += p[k] * q[k];
+            }
+        }
+        d
+    };
+    let mut x: Vec<[f64; 3]> = positions[fixed..].to_vec();
+    let mut r = vec![[0.0; 3]; free];
+    apply(&x, &mut r);
+    for (i, ri) in r.iter_mut().enumerate() {
+        let mut b = [0.0; 3];
+        for &(u, w) in &weights[fixed + i] {
+            if (u as usize) < fixed {
+                b = add(b, scale(positions[u as usize], w));
+            }
+        }
+        *ri = sub(b, *ri);
+    }
+    let precondition = |r: &[[f64; 3]]| -> Vec<[f64; 3]> {
+        r.iter()
+            .zip(&diagonal)
+            .map(|(ri, d)| scale(*ri, 1.0 / d))
+            .collect()
+    };
+    let small = |z: &[[f64; 3]]| z.iter().all(|zi| norm(*zi) <= options.tolerance * edge);
+    let mut z = precondition(&r);
+    let mut p = z.clone();
+    let mut rz = columns(&r, &z);
+    let mut q = vec![[0.0; 3]; free];
+    let mut outcome = (options.max_iterations, false);
+    for iteration in 0..=options.max_iterations {
+        if small(&z) {
+            outcome = (iteration, true);
+            break;
+        }
+        if iteration == options.max_iterations {
+            break;
+        }
+        apply(&p, &mut q);
+        let pq = columns(&p, &q);
+        let alpha: [f64; 3] =
+            std::array::from_fn(|k| if pq[k] > 0.0 { rz[k] / pq[k] } else { 0.0 });
+        for i in 0..free {
+            for k in 0..3 {
+                x[i][k] += alpha[k] * p[i][k];
+                r[i][k] -= alpha[k] * q[i][k];
+            }
+        }
+        z = precondition(&r);
+        let next = columns(&r, &z);
+        let beta: [f64; 3] =
+            std::array::from_fn(|k| if rz[k] > 0.0 { next[k] / rz[k] } else { 0.0 });
+        for i in 0..free {
+            for k in 0..3 {
+                p[i][k] = z[i][k] + beta[k] * p[i][k];
+            }
+        }
+        rz = next;
+    }
+    positions[fixed..].copy_from_slice(&x);
+    outcome
 }
 
 #[cfg(test)]
