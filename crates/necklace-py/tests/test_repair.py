@@ -13,7 +13,7 @@ from conftest import run, torus
 trimesh = pytest.importorskip("trimesh")
 
 MAJOR, MINOR = 1.0, 0.3
-# Fine enough that the band (at least half an edge each side) stays thin.
+# Fine enough that the band (at least a tenth of an edge each side) stays thin.
 NU, NV = 96, 40
 
 

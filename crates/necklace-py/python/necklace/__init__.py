@@ -546,7 +546,7 @@ def repair(
             genus results. Excludes ``genus``.
         only: ``"handles"`` (only cuts) or ``"tunnels"`` (only plugs); default both.
         band: each side of the band a cut removes lies this fraction of the loop's
-            radius from it (at least half an edge), in (0, 0.5].
+            radius from it (at least a tenth of the edges it crosses), in (0, 0.5].
         progress: as for :func:`find_necks`, called through each loop run.
         **options: :func:`find_necks`'s keyword arguments (``h``, ``levels``, ...),
             for the loop runs.

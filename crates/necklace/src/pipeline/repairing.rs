@@ -65,9 +65,8 @@ pub struct Cut {
     pub refined_within: f64,
 }
 
-/// The band's width the surface is refined for, as a fraction of the loop's radius
-/// (each side lies at least half an edge from the loop: with edges of a quarter of
-/// the radius, an eighth of it).
+/// The band's width a coarse loop's surface is refined for, as a fraction of the
+/// loop's radius (the refinement reaches three times this from the loop).
 const MIN_BAND: f64 = 0.125;
 
 /// Each side of the band lies at least this fraction of the mean length of the edges
@@ -84,8 +83,8 @@ const COARSE_LOOP: usize = 24;
 /// Remove the class of `neck` (found on `surface`): where the loop is coarse (fewer
 /// than [`COARSE_LOOP`] points) the surface near it is refined until the loop crosses
 /// edges no longer than a quarter of its radius; the
-/// band between the curves at `band` × its radius (at least half the mean length of
-/// the edges it crosses) on either side is cut out and each boundary closed by a cap
+/// band between the curves at `band` × its radius (at least a tenth of the mean length
+/// of the edges it crosses) on either side is cut out and each boundary closed by a cap
 /// started on the cone from the loop's saddle, moved with the boundary, and faired as
 /// `fairing` says.
 pub fn cut_along_loop(
@@ -315,7 +314,7 @@ pub struct RepairOptions {
     /// Only handles (`Inside`: cuts) or only tunnels (`Outside`: plugs); default both.
     pub only: Option<Side>,
     /// Each side of the band a cut removes lies this fraction of the loop's radius from
-    /// it, at least half an edge (default 0.15: a narrower gap between a cut's caps
+    /// it, at least a tenth of an edge (default 0.15: a narrower gap between a cut's caps
     /// makes the output hard to mesh for a later `find_necks`; at 0.05 the skull's
     /// took over 10 minutes instead of 15 s).
     pub band: f64,
