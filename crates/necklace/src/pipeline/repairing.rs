@@ -81,7 +81,7 @@ const MIN_BAND_EDGES: f64 = 0.1;
 const COARSE_LOOP: usize = 24;
 
 /// Remove the class of `neck` (found on `surface`): where the loop is coarse (fewer
-/// than [`COARSE_LOOP`] points) the surface near it is refined until the loop crosses
+/// than 24 points) the surface near it is refined until the loop crosses
 /// edges no longer than a quarter of its radius; the
 /// band between the curves at `band` × its radius (at least a tenth of the mean length
 /// of the edges it crosses) on either side is cut out and each boundary closed by a cap
