@@ -132,7 +132,7 @@ pub const DEFAULT_MAX_MEMORY: u64 = 8_000_000_000;
 
 /// Bytes of peak memory per volume tet of a whole run (the mesh, its Laplacian and
 /// smoothing, the Morse analysis and the loops): measured 380 on the real models
-/// (`docs/benchmarks.md`, "Real models"), rounded up. Budgets in bytes are turned into
+/// (`docs/decisions.md`, the memory budget), rounded up. Budgets in bytes are turned into
 /// tets with it.
 pub const BYTES_PER_TET: f64 = 400.0;
 
