@@ -4,6 +4,10 @@
 //! ([`ErrorKind`]), *where* (the file or source name, and a [`Location`]: a line or a
 //! byte offset) and a short human message. Its `Display` is always a single line, e.g.
 //! `bunny.off: line 12: vertex index 3490 out of range (3485 vertices)`.
+//!
+//! [`printable`] makes what a message quotes from the input one visible line: control
+//! and invisible characters as escapes (`\x1b`, `\u{feff}`), and numbers of more than 24
+//! digits in scientific notation (never a 300-digit number).
 
 use std::fmt;
 use std::path::Path;

@@ -1,5 +1,9 @@
 //! Small fixed-size vector helpers shared by all modules (plain `[f64; 3]` arithmetic).
 //! Not a stage: it holds no algorithm of the method, only the arithmetic every stage uses.
+//!
+//! Besides the arithmetic: closest points on a triangle or a segment, bounds, and
+//! [`illinois_root`], the crate's one 1-D root finder (the tightening's anchor search, the
+//! mesher's cut points).
 
 /// `a − b`.
 #[inline]

@@ -39,7 +39,7 @@
 //! - [`segment`] (after the method; sec. 1 names it as the loops' use): cut the surface
 //!   along loops into parts, with their areas, volumes and topology
 //!   ([`pipeline::segment_along_loops`]).
-//! - [`surgery`] (after the method, in progress): removing handles and tunnels along
+//! - [`surgery`] (after the method): removing handles and tunnels along
 //!   their loops: the band's curves round a loop and the caps that close a cut;
 //!   [`pipeline::repair`] (`necklace repair`) composes them with `segment`.
 //! - [`pipeline`] composes them; [`output`] writes their results; [`render`] draws

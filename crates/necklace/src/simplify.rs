@@ -6,8 +6,9 @@
 //! lattice's resolution (`h`, by default 1/64 of the bounding-box diagonal), not on how
 //! finely that shape is triangulated. A surface of a million triangles costs the survey,
 //! the mesher's sizing and every distance query in proportion to its size all the same.
-//! `pipeline` runs the method on the copy made here and carries the loops back to the
-//! original by cutting it with the same planes (`loops::transfer_loops`).
+//! `pipeline` runs the method on the copy made here (for a surface above
+//! [`SimplifyOptions::above`] triangles: `pipeline::working`) and carries the loops back
+//! to the original by cutting it with the same planes (`loops::transfer_loops`).
 //!
 //! Method: Garland and Heckbert's quadric error metric, edge collapses in rounds.
 //! - The vertices are first put in Morton order of their positions and the triangles in

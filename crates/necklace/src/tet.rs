@@ -7,8 +7,10 @@
 //! [`TetMesh::new`] for the stages that walk vertex stars.
 //!
 //! Queries: volumes, boundary faces, Euler characteristic χ = V − E + F − T, dihedral
-//! angles, and [`TetMesh::classify_boundary`] for meshes read from files, which carry no
-//! vertex kinds.
+//! angles, components, [`TetMesh::topology`] ([`TetTopology`]: per component its χ and
+//! the χ of each boundary surface), and [`TetMesh::classify_boundary`] for meshes read
+//! from files, which carry no vertex kinds. [`renumber_used`] is the crate's one tet
+//! compaction (the vertices the tets use, renumbered in order).
 
 use std::collections::HashMap;
 

@@ -1,5 +1,5 @@
 //! Dataset runs: the whole method on many meshes, each in its own worker process, one
-//! JSON row per mesh appended to a runs file, resumable (issue 40).
+//! JSON row per mesh appended to a runs file, resumable.
 //!
 //! This is not a stage of the method. It sits above [`pipeline`](crate::pipeline) and
 //! [`output`](crate::output), which it calls once per mesh, in a worker process (the
@@ -8,6 +8,16 @@
 //! time ends that mesh alone. The batch watches each worker, stops it at the time and
 //! memory limits (no task scheduler does that: Dask and Ray leave it to the task), and
 //! writes what ended it as the row's [`Status`].
+//!
+//! [`collect_inputs`] turns files, folders (searched recursively) and `@LIST` files into
+//! the meshes to run. [`supervise`] spawns the caller's worker command, polls it for its
+//! exit, its time and its resident memory (`/proc`), kills it at the limits and turns
+//! what ended it into a [`Row`]; [`work`] is the worker's body (read the mesh,
+//! `find_necks`, optionally `write_run`) and returns its row. Rows ([`Row`], [`Status`],
+//! [`RowKey`], [`RowFile`]): the options travel to the worker and into the key as JSON
+//! ([`options_json`], [`options_hash`]; the only place `sha2` is named).
+//! [`CRASH_VARIABLE`] and [`HOG_VARIABLE`] are test-only triggers (a crash, a memory
+//! hog).
 //!
 //! Steps of [`run`]:
 //! 1. The runs file's rows are read ([`read_rows`]; a line a kill cut short is cut off).

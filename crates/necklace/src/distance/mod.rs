@@ -6,6 +6,25 @@
 //! far-field expansions of the fast winding number on the same tree; the result is
 //! read-only and `Send + Sync`, so one instance serves any number of threads.
 //!
+//! [`SurfaceDistance::of_surface`] is a run's one structure, shared by the input checks,
+//! both volume meshes (the mesher's domain and its feature snapping), the distance field
+//! and the loops: its crossings found once, and the sign taken from the closest point's
+//! angle-weighted pseudonormal wherever that decides it
+//! ([`SurfaceDistance::use_pseudonormal_sign`]: everywhere on a closed manifold that does
+//! not cross itself; where it crosses itself or has non-manifold vertices, on each
+//! triangle away from them whose side winding numbers, read once at four points, agree).
+//! A dense input the pipeline simplifies is built [`SurfaceDistance::without_winding`] (no
+//! winding expansions, no pseudonormals: the stages that ask signs work on the copy;
+//! [`SurfaceDistance::add_winding`] adds the expansions); [`SurfaceDistance::recording`]
+//! records crossings without the pseudonormal sign.
+//!
+//! Crossings: [`SurfaceDistance::self_intersections`] (pairs of faces meeting along a
+//! segment longer than [`CROSSING_TOLERANCE`] of the diagonal, [`crossing_segment`], which
+//! takes triangles coplanar up to rounding, [`COPLANAR_TOLERANCE`], as coplanar) and
+//! [`crossings_among`] (those of some faces, after an edit). [`nesting`]: which component
+//! encloses which, by winding numbers (the input step's orientation, the volume stage's
+//! topology prediction).
+//!
 //! Conventions:
 //! - Distances are Euclidean, in the units of the mesh positions, to the triangles
 //!   themselves (not to the vertices); they are exact up to rounding.

@@ -3,7 +3,8 @@
 //! Readers: OBJ, OFF, PLY (ascii, binary little and big endian) and STL (ascii and
 //! binary). Writers: OBJ, OFF and binary little-endian PLY. Entry points:
 //! [`read_mesh`] (a path; format from the extension, else from the content),
-//! [`read_mesh_bytes`] (bytes already in memory) and [`write_mesh`].
+//! [`read_mesh_bytes`] (bytes already in memory) and [`write_mesh`]; [`mesh_files`]
+//! lists the meshes of a folder.
 //!
 //! The readers are our own rather than tobj / ply-rs / stl_io because every error must
 //! name its line or byte offset, no input may panic, and a header's counts must never
@@ -18,9 +19,16 @@
 //!
 //! Tetrahedral meshes have their own entry points, [`read_tet_mesh`] and
 //! [`write_tet_mesh`] (plus byte-level variants), for TetGen `.node`/`.ele`, Medit
-//! `.mesh`, Gmsh `.msh` (2.2 and 4.1 ascii) and VTK XML `.vtu` (ascii): vertex and tet
-//! order are kept, every tet is re-oriented to positive volume, and vertex kinds come
-//! from [`TetMesh::classify_boundary`] unless the file carries the kinds we wrote.
+//! `.mesh`, Gmsh `.msh` (2.2 and 4.1 ascii) and VTK XML `.vtu` (read ascii or raw
+//! appended, written binary): vertex and tet order are kept, every tet is re-oriented to
+//! positive volume, and vertex kinds come from [`TetMesh::classify_boundary`] unless the
+//! file carries the kinds we wrote.
+//!
+//! Also written: point clouds ([`write_point_cloud`], PLY) and closed polylines as OBJ
+//! ([`write_polylines`]), PLY (bare edges, the polyline's index on its vertices:
+//! [`write_polylines_ply`]) and VTK ([`write_polylines_vtk`]: `.vtp` polylines, `.vtu`
+//! line cells). Submodule `vtk` holds the VTK XML files' zlib-block encoding, the only
+//! place `flate2` is named.
 
 mod gmsh;
 mod medit;

@@ -1,5 +1,5 @@
 //! What a loop does to the surface: the edges it crosses, its Z2 homology class, and
-//! the areas of the two sides it cuts the surface into (issue 13).
+//! the areas of the two sides it cuts the surface into.
 //!
 //! A tightened loop is a cyclic sequence of [`SurfacePoint`]s; each segment between two
 //! consecutive points lies in one face (for a segment along an edge, the lower-indexed

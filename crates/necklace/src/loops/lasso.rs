@@ -1,4 +1,4 @@
-//! The lasso of a loop: the circle that fits it best, for a grasp planner (issue 19).
+//! The lasso of a loop: the circle that fits it best, for a grasp planner.
 //!
 //! A neck loop is a closed geodesic on the surface; a gripper or a rope that lassoes the
 //! neck is a circle. [`fit_lasso`] fits one: the least-squares plane of the polyline

@@ -1,4 +1,4 @@
-//! Membrane loops (issue 14): the initial loop around a saddle where no plane through it
+//! Membrane loops: the initial loop around a saddle where no plane through it
 //! closes around it (a hole whose rim rises and falls, a window with curved wires).
 //!
 //! The membrane of a 2-saddle is its descending 2-manifold: the points whose steepest

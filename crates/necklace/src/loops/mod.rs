@@ -16,28 +16,36 @@
 //!    construction gave it (`initial`).
 //! 2. [`tighten`](mod@tighten): shorten it into a closed geodesic, not tied to mesh edges. A loop that
 //!    collapses (slides off a cap) or does not settle is dropped with its reason.
-//! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; keep
-//!    one loop per neck (cycle-closing loops one per independent Z2 class, shortest
-//!    first; necks by shape one per lobe and class, where a separating saddle whose lobe
-//!    bulges less than the Morse stage's `min_bulge` is a neck only if its loop opens
-//!    out on both sides by [`LoopOptions::min_opening`] ([`opening`]) round a roundish
-//!    neck ([`LoopOptions::max_flatness`])); move each kept cycle-closing loop
-//!    to the narrowest place of its handle or tunnel, whichever of its saddles the
-//!    lattice gave: parallel planes up to [`LoopOptions::slide_steps`] ×
-//!    [`LoopOptions::slide_step`] × diagonal away are cut and tightened, and the
-//!    shortest loop of its class wins; merge duplicates (centres
-//!    within `merge_distance` × diagonal and lengths within `merge_length`, or the same
-//!    class and each within `merge_overlap` × radius of the other), keeping the
+//! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; keep one
+//!    loop per neck (cycle-closing loops one per independent Z2 class, shortest first;
+//!    necks by shape one per lobe and class, where a separating saddle whose lobe bulges
+//!    less than the Morse stage's `min_bulge` is a neck only if its loop opens out on both
+//!    sides by [`LoopOptions::min_opening`] ([`opening`]) round a roundish neck
+//!    ([`LoopOptions::max_flatness`]: its length against the inscribed ball at the saddle,
+//!    from the `distance` service)); move each kept cycle-closing loop to the narrowest
+//!    place of its handle or tunnel, whichever of its saddles the lattice gave: parallel
+//!    planes up to [`LoopOptions::slide_steps`] × [`LoopOptions::slide_step`] × diagonal
+//!    away are cut and tightened, and the shortest loop of its class wins; merge duplicates
+//!    (centres within `merge_distance` × diagonal and lengths within `merge_length`, or the
+//!    same class and each within `merge_overlap` × radius of the other), keeping the
 //!    highest persistence, then the shortest; order by persistence (descending), then
 //!    length.
 //! 4. [`lasso`]: each kept loop's best-fit circle and how far the loop strays from it.
 //!
 //! A seed may need a disk ([`Seed::disk_only`]: the Morse stage's completions, saddles
 //! not selected as necks): its plane's curve around it is kept only where no other
-//! curve of the plane lies inside it, so that the loop bounds a disk of the seed's side
-//! (a handle or tunnel loop whatever the saddle); only the plane through it is cut, no
-//! membrane, and its tightening may shrink it any amount. [`complete_classes`] adds
-//! such loops to a result where they add a class.
+//! curve of the plane lies inside it ([`cut::encloses_another`]), so that the loop bounds
+//! a disk of the seed's side (a handle or tunnel loop whatever the saddle); only the
+//! plane through it is cut, no membrane, and its tightening may shrink it any amount.
+//! [`complete_classes`] adds such loops to a result where they add a class.
+//!
+//! Also here: [`classes`] (the edges a loop crosses, its Z2 class, the areas of its
+//! sides); [`LoopSurface`] (a surface's topology, homology basis and openings, built
+//! once); the result types [`NeckLoop`], [`DroppedLoop`] and [`DropReason`]; and
+//! [`transfer_loops`]: loops found on a simplified copy rebuilt on the input (the same
+//! plane or membrane, else the strip of faces under the copy's loop, else its best-fit
+//! plane), tightened and measured there, and kept only as the same neck (length within
+//! 5 %, centre within half a radius), else dropped as [`DropReason::NotTransferred`].
 //!
 //! Units are those of the surface. Every seed ends either as a loop or in `dropped` with
 //! a reason. Seeds are processed in parallel; the result does not depend on the thread

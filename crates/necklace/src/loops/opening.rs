@@ -1,5 +1,5 @@
 //! How the surface opens out on the two sides of a loop: the neck test for separating
-//! saddles whose lobe is not much fatter than the neck (issue 13).
+//! saddles whose lobe is not much fatter than the neck.
 //!
 //! A neck is where the surface is saddle-shaped all round the loop: walking away from
 //! the loop, on either side, the curves parallel to it get longer. On a side of a

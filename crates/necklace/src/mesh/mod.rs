@@ -5,8 +5,17 @@
 //! from outside for an outward-oriented mesh). Nothing is precomputed; topology is built
 //! on demand by [`Topology::new`] (edges and their faces, vertex-to-face adjacency,
 //! components) and summarised by [`MeshReport::new`], which is what `necklace info`
-//! prints. [`HomologyBasis::new`] gives a Z2 homology basis (tree–cotree) to name the
-//! class of a closed curve on the surface.
+//! prints (validity, genus per component, a flat surface, coordinates too large).
+//! [`HomologyBasis::new`] gives a Z2 homology basis (tree–cotree) to name the class of a
+//! closed curve on the surface from the edges it crosses; [`Z2Basis`] and [`z2_rank`]
+//! compare such classes.
+//!
+//! Also here: [`Side`], the one name of the two regions a surface bounds (inside,
+//! outside) for every stage, a loop's kind (handle, tunnel) being its side; [`Csr`], the
+//! crate's one adjacency-list type (topology, tets, the mesher's stars); and the repairs
+//! that keep the shape: [`weld`] (boundary corners within a tolerance merged, collapsed
+//! triangles removed), [`remove_unreferenced`] and [`orient_consistently`] (libigl's
+//! `bfs_orient`).
 //!
 //! Conventions:
 //! - An *edge* is an unordered vertex pair used by at least one triangle; a *boundary

@@ -1,5 +1,5 @@
 //! Which cycles of the superlevel sweep are essential: the first cohomology over Z2 of
-//! the complex the sweep covers (issue 13, "pair the noise cycles away").
+//! the complex the sweep covers, so that the noise cycles are paired away.
 //!
 //! The sweep ([`roles`](super::roles)) adds the interior vertices from the top down, the
 //! outer sphere's vertices joined as one from the start; the surface's vertices are

@@ -1,14 +1,17 @@
 //! The smoothed distance field and its critical points: which 2-saddles mark necks
-//! (paper sections 3 and 4.1–4.2, judged across scales as in issue 13).
+//! (paper sections 3 and 4.1–4.2, judged across scales).
 //!
 //! Input: a [`TetMesh`] whose vertex kinds say which vertices are on the surface and on
 //! the outer sphere, and a field with one value per vertex (the pipeline passes the
 //! exact distance to the surface: 0 on surface vertices, the true distance on the outer
 //! sphere). Every non-interior vertex is a Dirichlet vertex and keeps its value.
 //! [`analyze`] then runs the method:
-//! 1. assemble the cotangent stiffness `L` and lumped mass `M` ([`laplacian`]);
-//! 2. take implicit heat steps `(M + τ_k L) F' = M F` ([`smoothing`]) on one of two
-//!    [`Schedule`]s:
+//! 1. assemble the cotangent stiffness `L` and lumped mass `M` ([`laplacian`], as
+//!    [`SparseMatrix`]);
+//! 2. take implicit heat steps `(M + τ_k L) F' = M F` ([`smoothing`]: the reduced
+//!    Dirichlet system assembled once, [`HeatSolver::set_tau`] for each step's `τ`,
+//!    conjugate gradients from a projected warm start, preconditioned by Jacobi or by
+//!    [`multigrid`]) on one of two [`Schedule`]s:
 //!    - **scale space** (default): heat times `t_k = s_k²` on a geometric sequence of
 //!      scales `s_k` (lengths, the input's units) from `min_scale` (the pipeline passes
 //!      twice the lattice spacing) to `max_scale` × the surface's bounding-box diagonal,
@@ -20,17 +23,20 @@
 //!    When every Dirichlet value is 0 (inside), the map is linear, so `F` is rescaled
 //!    to `max |F| = 1` after each step (thin parts decay by up to 1e-47); with non-zero
 //!    boundary values (outside) it is not;
-//! 3. at every classified level, classify every interior vertex by its link
-//!    ([`critical`]), check the Morse sum against the mesh's topology, track the
-//!    critical points from level to level ([`tracking`]) — but not where the field has
-//!    *drained* below [`MorseOptions::drained_floor`] (1e-8) of its largest value: there
-//!    the solve's error, not the field, orders neighbouring values, so those critical
-//!    points are only counted ([`StepSummary::drained`]) —, give every 2-saddle its
-//!    topological role by a superlevel sweep ([`roles`]: separating with a bulge ratio,
-//!    cycle-closing, or a local cycle: lattice noise) and fit its Hessian ([`hessian`]).
-//!    This analysis of level `k` (mostly sequential) runs while level `k + 1`'s heat
-//!    step (parallel) is solved; the two share nothing they write, so the result is
-//!    that of running them in turn;
+//! 3. at every classified level, classify every interior vertex by its link ([`critical`]:
+//!    [`Links`] built once, a vertex classified again only where its link changed sides,
+//!    [`LinkSides`]), check the Morse sum against the mesh's topology
+//!    ([`expected_morse_sum`], from its subcomplexes), track the critical points from level
+//!    to level ([`tracking`]) — but not where the field has *drained* below
+//!    [`MorseOptions::drained_floor`] (1e-8) of its largest value: there the solve's error,
+//!    not the field, orders neighbouring values, so those critical points are only counted
+//!    ([`StepSummary::drained`]) —, give every 2-saddle its topological role by a
+//!    superlevel sweep ([`roles`]: separating with a bulge ratio, cycle-closing, or a local
+//!    cycle: lattice noise; whether a closed cycle is essential by its Z2 class over a
+//!    cocycle basis, [`cycles`], so the genus is known at every level) and fit its Hessian
+//!    ([`hessian`]). This analysis of level `k` (mostly sequential) runs while level
+//!    `k + 1`'s heat step (parallel) is solved (`rayon::join`); the two share nothing they
+//!    write, so the result is that of running them in turn;
 //! 4. select. Scale space: a 2-saddle track is a neck candidate when it lives at least
 //!    `min_levels` levels, its Hessian has signature (−, −, +) at some level, and it is
 //!    cycle-closing at such a level (then its *representative* level, where it is
@@ -59,6 +65,10 @@
 //!    Hessian's three eigenvectors. They are not necks by their
 //!    shape; the pipeline cuts them only for the classes of the genus that the
 //!    selected saddles' loops miss.
+//!
+//! The result, [`MorseResult`]: per level its counts and checks, the selected [`Saddle`]s,
+//! every 2-saddle track not kept with its [`RejectReason`], the barcode ([`Bar`]: each
+//! track's life over scale), the completions, the smoothed field and timings.
 //!
 //! Conventions: `L` is positive semidefinite (`l = −Δf`), `M` gives a quarter of each
 //! tet's volume to each of its vertices; lengths in the mesh's units; scales are `√t`;
@@ -158,7 +168,7 @@ pub struct MorseOptions {
     /// the field, orders neighbouring values (default 1e-8; raised to 100× the solver's
     /// tolerance when that is looser than 1e-10).
     ///
-    /// Measured on the scorpion's inside (issue 18): solved once at the default
+    /// Measured on the scorpion's inside: solved once at the default
     /// tolerance 1e-10 and once at 1e-13, the two fields' 2-saddles differ only at
     /// vertices below 6e-10 (most below 1e-11), and from the 12th of 32 levels on more
     /// than 95 % of its critical points lie below 1e-8 — thousands, where the thin legs

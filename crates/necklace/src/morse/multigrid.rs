@@ -1,4 +1,4 @@
-//! Smoothed-aggregation algebraic multigrid: the heat steps' preconditioner (issue 18).
+//! Smoothed-aggregation algebraic multigrid: the heat steps' preconditioner.
 //!
 //! The heat system `A(τ) = M + τL` (on the free vertices) grows worse conditioned with
 //! `τ` and with the mesh's size, so Jacobi-preconditioned CG needs hundreds of iterations

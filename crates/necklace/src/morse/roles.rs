@@ -1,5 +1,5 @@
 //! The topological role of each 2-saddle: does it join two lobes or close a cycle?
-//! (issue 13; the paper's "distance to nearby loops" rule done by topology).
+//! (the paper's "distance to nearby loops" rule done by topology).
 //!
 //! Sweep the superlevel sets `{f ≥ c}` from the top down (in the classification's vertex
 //! order: outer-sphere vertices first, then interior vertices by decreasing `(f, index)`;

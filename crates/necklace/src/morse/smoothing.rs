@@ -30,7 +30,7 @@ pub enum Preconditioner {
     /// 5–8× fewer iterations than Jacobi, each about 3.5× the cost, plus a setup. On this
     /// project's 2-core machine it gains 8–15 % of the heat steps on the boot's inside
     /// (450 k unknowns) and the paper schedule, and loses on the wire sphere, so it is
-    /// not the default (`docs/benchmarks.md`, issue 18).
+    /// not the default (`docs/decisions.md`).
     Multigrid,
 }
 

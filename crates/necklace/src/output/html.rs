@@ -1,5 +1,5 @@
 //! `view.html`: one self-contained page to turn the shape round, look at its loops and
-//! ask what each is (issue 19). No network at view time: the data (the surface, the
+//! ask what each is. No network at view time: the data (the surface, the
 //! loops, the saddles, the barcode) is embedded as JSON, the surface's arrays as
 //! base64 little-endian `Float32` / `Uint32`, every coordinate relative to the
 //! surface's bounding-box centre (`offset`), and the WebGL code is our own

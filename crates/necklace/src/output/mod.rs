@@ -18,7 +18,9 @@
 //!   `type`, `selected`, `persistence`, `side` and colours (see
 //!   [`critical_point_cloud`]);
 //! - `view.html` (with `html`): the interactive page ([`html_page`]: the surface, the
-//!   loops and saddles in WebGL, a table of the loops, the barcode, a scale slider);
+//!   loops and saddles in WebGL, a table of the loops, the barcode, a scale slider; one
+//!   self-contained page, the data as JSON with base64 arrays, our own viewer
+//!   `viewer.html`; a surface above [`DISPLAY_TRIANGLES`] decimated through `simplify`);
 //! - `view.png` with a picture, and beside it `barcode.png`: one bar per 2-saddle track
 //!   of each side over scale, the necks in their kind's colour; `field.vtu` (volume meshes of both sides with the
 //!   smoothed field and the side per vertex, for ParaView) with the volume kept.
@@ -30,8 +32,9 @@
 //! the loops as PLY, each face carrying `segment`) and [`segments_json`].
 //!
 //! Units: the input mesh's; coordinates in its frame. Entry points: [`write_run`],
-//! [`report_json`] and back [`read_report_json`], [`loop_scene`], [`read_loops_json`],
-//! [`read_points_json`].
+//! [`report_json`] and back [`read_report_json`] / [`report_from_json`] (the report types
+//! derive `Deserialize`), [`read_run_json`] (for `necklace view`), [`loop_scene`],
+//! [`read_loops_json`] and [`read_points_json`] (for `necklace render`).
 
 use std::path::{Path, PathBuf};
 

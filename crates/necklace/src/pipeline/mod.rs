@@ -4,35 +4,60 @@
 //! and smoothing → critical points → neck loops. Each stage is a module that takes plain
 //! data and returns plain data; only this module calls one stage with another's output.
 //! The recipe, [`find_necks`]:
-//! 1. [`prepare_input`] (submodule `input`) refuses what no stage can use, repairs what
-//!    has one right answer (unreferenced vertices, faces that disagree with their
-//!    neighbours, components facing into their solid), says what it did and what is
-//!    still unusual (open, non-manifold, crossing itself), and builds the surface's one
-//!    distance structure (`distance`) that every later step shares;
-//! 2. per side ([`Side::Inside`] for handles, [`Side::Outside`] for tunnels), the volume
-//!    mesh (`volume::volume_mesh_surveyed`: the surface as a `volume::Domain`, sized for
-//!    thin parts, its topology checked against the surface's), from the one survey of
-//!    the surface both sides share (`volume::survey_surface`: thickness and gaps at
-//!    every vertex, creases, crossings; made before the sides start);
+//! 1. [`prepare_input`] / [`prepare_input_with`] (submodule `input`, [`InputOptions`])
+//!    welds boundary corners closer than [`DEFAULT_WELD`] × the diagonal ([`weld_input`],
+//!    also what `info` reads), refuses what no stage can use (also a surface with no
+//!    volume, a soup or open sheets, by a winding-number sample of its triangles),
+//!    repairs what has one right answer (unreferenced vertices, faces that disagree with
+//!    their neighbours, components facing into their solid, by nesting), counts
+//!    self-intersections, says what it did and what is still unusual (open,
+//!    non-manifold, crossing itself), and builds the surface's one distance structure
+//!    (`distance`) that every later step shares; the prepared mesh's `MeshReport` is
+//!    made once and handed on ([`PreparedSurface::mesh_report`]). Then (step 1b,
+//!    submodule `working`) a dense closed surface that does not cross itself is
+//!    simplified (`simplify`), and the copy used when it has the input's genus and does
+//!    not cross itself ([`NeckReport::simplified`]); the loops are carried back to the
+//!    input (`loops::transfer_loops`);
+//! 2. per side ([`Side::Inside`] for handles, [`Side::Outside`] for tunnels; `find_side`),
+//!    the volume mesh (`volume::volume_mesh_surveyed`: the surface as a `volume::Domain`,
+//!    sized for thin parts, its topology checked against the surface's), from the one
+//!    survey of the surface both sides share (`volume::survey_surface`: thickness and gaps
+//!    at every vertex, creases, crossings; made before the sides start);
 //! 3. the exact distance field on its vertices ([`distance_field`]);
 //! 4. smoothing over scale, critical points and the neck 2-saddles (`morse`);
-//! 5. a loop per saddle (`loops`: plane cut, tightening, selection; on the volume
-//!    mesh's boundary where a neck lies by a self-crossing); where those loops span
-//!    fewer classes than the genus, loops from the Morse stage's completions (the
-//!    vertices that close essential cycles without passing as necks: walls a cell or
-//!    two thick give them no 2-saddle Hessian), each kept only where its plane bounds a
-//!    disk of its side and it adds a class (`loops::complete_classes`); where they span
-//!    more, the seeds cut again keeping only curves that bound disks (`Seed::disk_only`);
-//! 6. the Morse and homology checks, and the side into the [`NeckReport`] (its types
-//!    live in submodule `report`; pictures and point clouds of it are `output`'s);
+//! 5. a loop per saddle ([`loop_seeds`]; `loops`: plane cut, tightening, selection; on the
+//!    volume mesh's boundary, [`meshed_boundary`], where a neck lies by a self-crossing);
+//!    where those loops span fewer classes than the genus, loops from the Morse stage's
+//!    completions (the vertices that close essential cycles without passing as necks: walls
+//!    a cell or two thick give them no 2-saddle Hessian), each kept only where its plane
+//!    bounds a disk of its side and it adds a class (`loops::complete_classes`); where they
+//!    span more, the seeds cut again keeping only curves that bound disks
+//!    (`Seed::disk_only`);
+//! 6. the Morse and homology checks, and the side into the [`NeckReport`] (built side by
+//!    side, with per-stage timings, critical points ([`tracked_points`]) and, with
+//!    `keep_volume`, the volume field; its types, [`SideReport`] and [`TrackedPoint`] among
+//!    them, live in submodule `report`; pictures and point clouds of it are `output`'s);
 //! 7. the loops' surface points renumbered to the input's vertices.
 //!
-//! The two sides run at the same time. Each side's stage timings are laps of its own
-//! clock, so they add up to the side's time; the run's `seconds` is its own wall clock
-//! (less than the input's time plus both sides').
-//! [`find_critical_points`] (submodule `critical`) is steps 1–4 for one side, what
-//! `necklace critical` runs. [`segment_along_loops`] (submodule `segmenting`) cuts the
-//! surface along loops (`segment`), what `necklace segment` runs.
+//! The two sides run at the same time (`rayon::join`, each reporting on its own
+//! [`Lane`]; `sides_at_once: false` runs them one after the other). Each side's stage
+//! timings are laps of its own clock, so they add up to the side's time; the run's
+//! `seconds` is its own wall clock (less than the input's time, [`NeckTimings::input`],
+//! plus both sides'). [`find_necks_with_progress`] reports progress; the crate re-exports
+//! [`find_necks`] with [`NeckOptions`] as `necklace::Options`.
+//!
+//! Besides: [`inspect_surface`] (what `info` prints); [`prepare_surface`] (closed manifold
+//! surfaces only) and [`load_surface`]; [`distance_field`]. [`find_critical_points`] and
+//! [`critical_points`] / [`critical_points_with`] (submodule `critical`,
+//! [`CriticalReport`]) are steps 1–4 for one side (input, volume, exact distance,
+//! `morse::analyze`), what `necklace critical` runs. [`segment_along_loops`] (submodule
+//! `segmenting`) cuts the surface along loops (`segment`), what `necklace segment` runs.
+//! [`repair`] / [`repair_with_progress`] (submodule `repairing`, plan in
+//! `docs/design-repair.md`; [`RepairOptions`], [`RepairTarget`], [`RepairReport`]) runs
+//! `find_necks`, then cuts along the loops shortest first, one [`cut_along_loop`] at a time
+//! (the `surgery` pieces and `segment`), each checked (valid, the same components, the
+//! genus one lower, no crossings) or skipped with its reason, and runs `find_necks` again
+//! while the genus is above the target; what `necklace repair` runs.
 
 mod critical;
 mod input;

@@ -1,10 +1,13 @@
-//! Repair: handles and tunnels removed along their neck loops (issue 41, in progress;
+//! Repair: handles and tunnels removed along their neck loops (the plan:
 //! `docs/design-repair.md`).
 //!
-//! One operation ([`cut_along_loop`]) cuts the surface along a band round one neck loop
-//! and closes the two boundaries with caps, which removes the loop's class. A handle
-//! loop's caps span the neck inside the solid (the solid is cut through); a tunnel
-//! loop's span the hole outside it (the hole is plugged).
+//! One operation ([`cut_along_loop`]) cuts the surface along a band round one neck loop and
+//! closes the two boundaries with caps, which removes the loop's class. A handle loop's
+//! caps span the neck inside the solid (the solid is cut through); a tunnel loop's span the
+//! hole outside it (the hole is plugged). Its steps: `surgery::refine_near` where the loop
+//! is coarse (until it crosses edges no longer than a quarter of its radius),
+//! `surgery::offset_curves`, `segment` along both curves, the band's segment cut out, and
+//! `surgery::cap` on each boundary.
 //!
 //! [`repair`] reads as the recipe:
 //! 1. The input step (welding, orientation); refuse what cannot be repaired (open,

@@ -1,4 +1,4 @@
-//! Barcode pictures of the scale space (issue 13): one horizontal bar per 2-saddle track,
+//! Barcode pictures of the scale space: one horizontal bar per 2-saddle track,
 //! from the scale it appeared at to the first it was gone, on a logarithmic scale axis;
 //! the tracks selected as necks are drawn in colour, the rest in grey. One panel per
 //! side (handles inside, tunnels outside), bars sorted by birth. Entry point:

@@ -13,6 +13,13 @@
 //! grid (1, 2 or 3 in a row, 4 as 2 × 2). Everything is drawn at `supersample` times the
 //! resolution and box-filtered down, which anti-aliases edges, lines and text.
 //!
+//! Parts: `raster` (the supersampled canvas: a z-buffered surface shaded from its
+//! interpolated corner normals, an overlay of tubes and dots with its own depth,
+//! compositing, outlines, text), `font` (a 5 × 7 bitmap), [`labels`] (greedy placement:
+//! beside the curve, clear of the other labels, the legend and the view's name, else on
+//! rings with a leader line), [`chart`], and [`barcode`] (the scale space's barcodes).
+//! PNG through the `png` crate, which no other module names.
+//!
 //! Conventions: world coordinates are the mesh's; pixel x to the right, y down; colours
 //! are sRGB bytes. Entry point: [`render`] → [`Rendered`] (the [`Image`] and, per tile,
 //! its [`Projection`], so callers can find where a world point landed);

@@ -1,9 +1,10 @@
 //! Segmentation of a surface along closed curves on it: what the neck loops are for
-//! (issue 19; the paper's sec. 1 names segmentation as their first use).
+//! (the paper's sec. 1 names segmentation as their first use).
 //!
 //! Input: a surface and closed curves given as [`CurvePoint`]s — mesh vertices or points
 //! on mesh edges, each consecutive pair on a common triangle (or a common edge), as the
-//! loop stage's tightened loops are. [`segment`] then:
+//! loop stage's tightened loops are (`pipeline::segment_along_loops` passes the loops'
+//! surface points). [`segment`] then:
 //! 1. checks the curves against the mesh;
 //! 2. inserts the curves as edges (submodule `arrangement`): every edge a curve crosses is split
 //!    there (on both of its triangles), and every triangle a curve passes through is cut
@@ -17,6 +18,9 @@
 //!    that bound it, and the volume of the solid it encloses once each boundary is
 //!    closed by a fan from its centroid (divergence theorem; where a boundary cannot be
 //!    traced as one cycle, `None`).
+//!
+//! The result, a [`Segmentation`]: the refined mesh, each face's segment, and each
+//! [`Segment`] with its measures.
 //!
 //! Separating loops split the surface into parts; cycle-closing loops cut a handle open:
 //! a torus cut along its handle loop is one segment, a cylinder (χ = 0, two boundaries).

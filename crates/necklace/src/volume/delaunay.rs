@@ -2,7 +2,7 @@
 //!
 //! Computes the tets of the Delaunay tetrahedralization of `points`: every tet's
 //! circumsphere holds no point strictly inside. It is the first step of a mesher whose
-//! size follows the surface (issue 39): the tets are later kept or dropped by the
+//! size follows the surface (`sampled`): the tets are later kept or dropped by the
 //! domain, so the set need not be convex.
 //!
 //! Algorithm (Bowyer 1981, Watson 1981): the points are inserted one at a time, in the

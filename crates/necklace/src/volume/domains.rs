@@ -210,8 +210,8 @@ impl<D: Domain> Shell<D> {
     }
 
     /// The sphere's spacing: a quarter of its radius, never finer than `h`. (The sphere
-    /// only closes the shell: tunnels lie at the surface. An eighth, as before issue 18,
-    /// gave the kitten's shell 17 % more unknowns and the same loops.)
+    /// only closes the shell: tunnels lie at the surface. An eighth gave the kitten's
+    /// shell 17 % more unknowns and the same loops.)
     fn sphere_spacing(&self, h: f64) -> f64 {
         (self.radius / 4.0).max(h)
     }

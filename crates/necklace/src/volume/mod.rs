@@ -4,32 +4,44 @@
 //! is negative inside the region, zero on its boundary and 1-Lipschitz (a signed
 //! distance, or the max of signed distances for an intersection). For the method this is
 //! the solid inside the input surface (handles) or the shell between the surface and a
-//! bounding sphere (tunnels): [`SurfaceInside`] and [`Shell`] (`domains`). This replaces
-//! the paper's TetGen step (sec. 4, "preprocessing"); see issue 3 for why. TetGen itself
-//! is `volume::tetgen`, behind the `tetgen` feature (AGPL-3.0).
+//! bounding sphere (tunnels): [`SurfaceInside`] and [`Shell`] (`domains`; a [`Shell`]
+//! takes any solid, the tests' analytic shells too). This replaces the paper's TetGen
+//! step (sec. 4, "preprocessing"). TetGen itself is `volume::tetgen`, behind the `tetgen`
+//! feature (AGPL-3.0): the switches "pq1.2" inside and for the shell, through `tritet`,
+//! which no other module names.
 //!
-//! On a surface, [`volume_mesh`] (`surface`) is the whole stage: the topology the
-//! surface predicts (`prediction`), thickness and gaps measured into sizing features
-//! and creases to snap onto (`surface_sizing`), then meshing (below) and refining
-//! until the mesh's topology is the surface's. The measures do not depend on the side:
-//! [`survey_surface`] makes them once and [`volume_mesh_surveyed`] meshes a side from
-//! them (the pipeline meshes both sides from one survey).
+//! On a surface, [`volume_mesh`] / [`volume_mesh_with`] (`surface`) is the whole stage:
+//! the topology the surface predicts ([`expected_topology`]: from the components' genus
+//! and nesting), thickness and gaps measured by rays and inscribed balls into sizing
+//! features, and creases and corners to snap onto (`surface_sizing`), then meshing
+//! (below); where the first mesh's topology differs from the prediction, a meshing sized
+//! by the thickness sampled over the triangles too (those that are long or whose corners
+//! disagree; made once, for the first side that asks), then refinement rounds. The
+//! measures do not depend on the side: [`survey_surface`] makes them once (thickness
+//! and gaps at every vertex, creases, crossings, the report the prediction reads) and
+//! [`volume_mesh_surveyed`] meshes a side from them (the pipeline meshes both sides from
+//! one survey).
 //!
 //! Steps (Labelle & Shewchuk, "Isosurface Stuffing", SIGGRAPH 2007):
-//! 1. `octree`: a balanced octree whose cells have size `h` wherever the boundary may
-//!    pass (|f(centre)| < half-diagonal; [`Domain::spacing_near`] may ask for less
-//!    detail on parts of the boundary; the 2:1 balance grades the rest), as small as the domain's [`SizingFeature`]s ask
-//!    where they reach (thin parts and gaps: no fixed floor), and coarser away from the
-//!    boundary. The memory budget ([`StuffingOptions::max_memory`], in tets
-//!    [`StuffingOptions::max_tets`]) is held three times: the
-//!    features' estimate, calibrated on one octree, sets a floor on their spacing
-//!    ([`spacing_floor`], `calibrated_floor`; reported in [`StuffingStats::spacing_floor`]),
-//!    a tree or a mesh still over it raises the floor and starts again, and a run over it without thin parts to coarsen is refused
-//!    with the figure.
+//! 1. `octree`: an octree, balanced bottom-up, whose cells have size `h` wherever the
+//!    boundary may pass (|f(centre)| < half-diagonal; [`Domain::spacing_near`] may ask for
+//!    less detail on parts of the boundary; the 2:1 balance grades the rest), as small as
+//!    the domain's [`SizingFeature`]s ask where they reach (thin parts and gaps: no fixed
+//!    floor; `sizing` passes each cell the features that reach it, level by level), and
+//!    coarser away from the boundary. The memory budget ([`StuffingOptions::max_memory`] at
+//!    [`BYTES_PER_TET`], the peak of a whole run measured per tet; in tets
+//!    [`StuffingOptions::max_tets`]) is held three times: the features' estimate,
+//!    calibrated on one octree (`calibrated_floor`: the estimate alone counts overlapping
+//!    regions several times), sets a floor on their spacing ([`spacing_floor`]; reported in
+//!    [`StuffingStats::spacing_floor`]), a tree or a mesh still over it raises the floor
+//!    and starts again, and a run over it without thin parts to coarsen is refused with the
+//!    figure ([`ErrorKind::OverBudget`]), before the lattice is allocated. The pipeline
+//!    gives each of two sides meshed at once half of [`VolumeOptions::max_memory`].
 //! 2. `background`: the octree's BCC tetrahedralisation (graded, conforming).
 //! 3. `stuffing`: domain values at the lattice vertices, cut points on sign-changing
-//!    edges, warping of vertices too close to a cut point (the paper's α everywhere), and
-//!    the stencils that fill each background tet with its inside part.
+//!    edges (the domain's ray hits, else regula falsi), warping of vertices too close to
+//!    a cut point (the paper's α everywhere), and the stencils that fill each background
+//!    tet with its inside part.
 //! 4. `repair`: pinches below the lattice resolution (tets touching along an edge or at
 //!    a vertex only) are undone by dropping the smaller side; their places are returned
 //!    ([`VolumeMesh::pinches`]) so a caller can refine there and mesh again (the
@@ -43,7 +55,17 @@
 //!    their volume.
 //! 6. `quality`: where a graded transition or a guarded warp left a tet with a small
 //!    dihedral angle, its vertices are moved (inside freely, on the boundary along it) to
-//!    raise the smallest angle of their stars to [`StuffingOptions::min_dihedral_deg`].
+//!    raise the smallest angle of their stars to [`StuffingOptions::min_dihedral_deg`]
+//!    (10° by default).
+//!
+//! A second mesher, experimental ([`Mesher::Sampled`], `--mesher sampled`): `sampled`
+//! bisects the surface to the spacing its thickness asks for, adds interior points from
+//! an octree graded by the distance to it, takes the Delaunay tetrahedralization of both
+//! (`delaunay`: Bowyer–Watson with Shewchuk's exact predicates, points added in batches,
+//! the only place `robust` is named), bisects boundary triangles until they are its faces
+//! (pairs flipped where it took the other diagonal), keeps the tets whose centroid is
+//! inside, then runs `chords` and `quality` with the samples fixed; [`SampledStats`] go
+//! in the report, and a warning where triangles stay unrecovered.
 //!
 //! Conventions: lengths in the domain's units; output tets positively oriented; vertex
 //! kinds from the sign (inside: interior) and [`Domain::boundary_kind`] (on the zero
@@ -110,7 +132,7 @@ pub const DEFAULT_MAX_MEMORY: u64 = 8_000_000_000;
 
 /// Bytes of peak memory per volume tet of a whole run (the mesh, its Laplacian and
 /// smoothing, the Morse analysis and the loops): measured 380 on the real models
-/// (`docs/benchmarks.md`, "Real models"), rounded up. Budgets in bytes are turned into
+/// (`docs/decisions.md`, the memory budget), rounded up. Budgets in bytes are turned into
 /// tets with it.
 pub const BYTES_PER_TET: f64 = 400.0;
 
@@ -674,9 +696,9 @@ fn build_octree(
                     return true;
                 }
                 // Only where the boundary may pass (f is 1-Lipschitz). A margin of one
-                // more cell (`half_diagonal + wanted`, before issue 18) kept a band of
-                // fine cells 3–4 h thick on each side: 15–30 % more unknowns and the
-                // same loops, angles and topology on the shared models.
+                // more cell (`half_diagonal + wanted`) keeps a band of fine cells 3–4 h
+                // thick on each side: 15–30 % more unknowns and the same loops, angles
+                // and topology on the shared models.
                 if f.abs() >= half_diagonal {
                     return false;
                 }

@@ -1,5 +1,5 @@
 //! A mesher whose size follows the boundary: the Delaunay tetrahedralization of points
-//! sampled on the boundary and graded inside, carved by the domain (issue 39).
+//! sampled on the boundary and graded inside, carved by the domain.
 //!
 //! Isosurface stuffing needs lattice cells of half a part's thickness everywhere along a
 //! thin part, in all three directions, so a plate costs its area over the thickness
