@@ -413,14 +413,7 @@ impl SurfaceDistance {
             .into_par_iter()
             .map_init(Vec::new, |candidates, i| {
                 let tri = bvh.tris[i];
-                let mut lo = tri[0];
-                let mut hi = tri[0];
-                for p in tri {
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(p[k]);
-                        hi[k] = hi[k].max(p[k]);
-                    }
-                }
+                let (lo, hi) = bounds(&tri);
                 candidates.clear();
                 bvh.overlapping(lo, hi, candidates);
                 let fi = bvh.faces[i];
@@ -429,13 +422,9 @@ impl SurfaceDistance {
                     .iter()
                     .filter(|&&j| bvh.faces[j] > fi)
                     .filter(|&&j| {
-                        let vj = triangles.get(bvh.faces[j] as usize).copied();
-                        vj.is_some_and(|vj| !vj.iter().any(|v| vi.contains(v)))
-                    })
-                    .filter(|&&j| bvh::triangles_cross(&tri, &bvh.tris[j]))
-                    .filter(|&&j| {
-                        crossing_segment(tri, bvh.tris[j])
-                            .is_some_and(|[p, q]| norm(sub(p, q)) > tolerance)
+                        triangles
+                            .get(bvh.faces[j] as usize)
+                            .is_some_and(|&vj| faces_cross(&tri, vi, &bvh.tris[j], vj, tolerance))
                     })
                     .map(|&j| [fi, bvh.faces[j]])
                     .collect::<Vec<_>>()
@@ -494,13 +483,7 @@ pub fn crossings_among(mesh: &SurfaceMesh, among: &[u32]) -> Vec<[u32; 2]> {
             let Some(tri) = corners(f) else {
                 return Vec::new();
             };
-            let (mut a, mut b) = (tri[0], tri[0]);
-            for p in tri {
-                for k in 0..3 {
-                    a[k] = a[k].min(p[k]);
-                    b[k] = b[k].max(p[k]);
-                }
-            }
+            let (a, b) = bounds(&tri);
             if (0..3).any(|k| b[k] < root_lo[k] || a[k] > root_hi[k]) {
                 return Vec::new();
             }
@@ -512,11 +495,14 @@ pub fn crossings_among(mesh: &SurfaceMesh, among: &[u32]) -> Vec<[u32; 2]> {
                 .map(|&j| (j, tree.faces[j]))
                 // A pair of two chosen faces is seen from both: kept from the lower.
                 .filter(|&(_, g)| g != f && !(chosen[f as usize] && g < f))
-                .filter(|&(_, g)| !mesh.triangles[g as usize].iter().any(|v| vf.contains(v)))
-                .filter(|&(j, _)| bvh::triangles_cross(&tri, &tree.tris[j]))
-                .filter(|&(j, _)| {
-                    crossing_segment(tri, tree.tris[j])
-                        .is_some_and(|[p, q]| norm(sub(p, q)) > tolerance)
+                .filter(|&(j, g)| {
+                    faces_cross(
+                        &tri,
+                        vf,
+                        &tree.tris[j],
+                        mesh.triangles[g as usize],
+                        tolerance,
+                    )
                 })
                 .map(|(_, g)| [f.min(g), f.max(g)])
                 .collect::<Vec<_>>()
@@ -526,6 +512,33 @@ pub fn crossings_among(mesh: &SurfaceMesh, among: &[u32]) -> Vec<[u32; 2]> {
     pairs.sort_unstable();
     pairs.dedup();
     pairs
+}
+
+/// A triangle's bounding box.
+fn bounds(tri: &[[f64; 3]; 3]) -> ([f64; 3], [f64; 3]) {
+    let (mut lo, mut hi) = (tri[0], tri[0]);
+    for p in tri {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
+/// Two faces (corners `a`, `b`; vertices `va`, `vb`) cross: they share no vertex, an
+/// edge of one passes through the other, and they meet along a segment longer than
+/// `tolerance` (the test of [`SurfaceDistance::self_intersections`]).
+fn faces_cross(
+    a: &[[f64; 3]; 3],
+    va: [u32; 3],
+    b: &[[f64; 3]; 3],
+    vb: [u32; 3],
+    tolerance: f64,
+) -> bool {
+    !vb.iter().any(|v| va.contains(v))
+        && bvh::triangles_cross(a, b)
+        && crossing_segment(*a, *b).is_some_and(|[p, q]| norm(sub(p, q)) > tolerance)
 }
 
 /// Two triangles cross (see [`SurfaceDistance::self_intersections`]) when they meet
