@@ -298,9 +298,9 @@ pub struct NeckArgs {
     /// Find tunnel loops (outside).
     #[arg(long)]
     pub tunnels: bool,
-    /// Run the two sides one after the other instead of at the same time: slower
-    /// (about 1.25x on 2 cores), with the peak memory of the larger side instead of
-    /// both (the boot: 1.24 GB instead of 1.86 GB).
+    /// Run the two sides one after the other instead of at the same time: slower,
+    /// with the peak memory of the larger side instead of both (figures in the
+    /// "options" table of docs/benchmarks.md).
     #[arg(long)]
     pub one_side_at_a_time: bool,
     /// Simplify a surface with more triangles than this (0: never) for the volume
