@@ -19,6 +19,16 @@
 //! when the four agree. Triangles of a crossing, the ring round them, those at a
 //! non-manifold or degenerate corner, and those whose samples disagree (a coplanar part
 //! touching them) leave the sign to the winding number at `p`.
+//!
+//! **Triangles that do not close** (holes, seams whose edges are used more often in one
+//! direction than the other) make the winding number vary off the surface, but only
+//! slowly far from those *unbalanced* edges: its gradient is the Biot–Savart integral
+//! over them, at most `L / (4π r²)` at distance `r` from them (`L`: their length,
+//! counted with their imbalance). A triangle then decides when the winding number just
+//! off its centroid lies on one side of ½ by more than the change the bound allows along
+//! the way to `p` (over the triangle, then along `p − q`); nearer the holes, the winding
+//! number at `p` decides. One sample a side, not four: the bound covers the triangle
+//! (`docs/decisions.md`).
 
 use rayon::prelude::*;
 
@@ -32,7 +42,27 @@ use crate::mesh::{SurfaceMesh, Topology};
 pub(super) struct Pseudonormals {
     normals: Vec<[[f64; 3]; 7]>,
     sides: Vec<[i8; 2]>,
+    /// Where the triangles do not close: what bounds the winding number's change.
+    open: Option<OpenChain>,
 }
+
+/// The bound on the winding number's change off a surface that does not close (see
+/// the module doc), per tree triangle.
+struct OpenChain {
+    /// `L / 4π`: the unbalanced edges' length, each times its imbalance, over 4π.
+    length: f64,
+    /// Distance from the triangle's centroid to the nearest unbalanced edge, less
+    /// [`OpenChain::extent`] (a lower bound for every point of the triangle).
+    clearance: Vec<f64>,
+    /// Largest distance from the triangle's centroid to a corner.
+    extent: Vec<f64>,
+    /// In front and behind: `|w − ½|` at the sample (0: undecided).
+    margin: Vec<[f64; 2]>,
+}
+
+/// Allowance for the fast winding number's error on the samples (about 1e-3 of the
+/// exact one away from the surface).
+const FAST_ERROR: f64 = 0.05;
 
 /// Barycentric coordinates this close to 0 put the closest point on an edge or corner.
 const FEATURE_EPSILON: f64 = 1e-9;
@@ -98,12 +128,10 @@ impl Pseudonormals {
         let manifold = !bad.contains(&true);
         let local = match local {
             Some(local) if !(manifold && local.crossings.is_empty()) => local,
-            _ if manifold => return Some(Self::build(mesh, bvh, &topology, &face_normals, None)),
+            _ if manifold => return Some(Self::build(mesh, bvh, &topology, &face_normals, None).0),
             _ => return None,
         };
-        if !is_closed_chain(mesh, &topology) {
-            return None;
-        }
+        let unbalanced = unbalanced_edges(mesh, &topology);
         // The crossing triangles and the ring round them.
         for [f, g] in local.crossings {
             for &v in mesh.triangles[*f as usize]
@@ -113,7 +141,17 @@ impl Pseudonormals {
                 bad[v as usize] = true;
             }
         }
-        let pseudonormals = Self::build(mesh, bvh, &topology, &face_normals, Some((&bad, &local)));
+        let open = !unbalanced.is_empty();
+        let (mut pseudonormals, margin) = Self::build(
+            mesh,
+            bvh,
+            &topology,
+            &face_normals,
+            Some((&bad, &local, open)),
+        );
+        if open {
+            pseudonormals.open = Some(open_chain(bvh, &unbalanced, margin));
+        }
         pseudonormals
             .sides
             .iter()
@@ -122,14 +160,16 @@ impl Pseudonormals {
     }
 
     /// The normals, and the sides: all `[+1, −1]` without `local`; else read off the
-    /// winding number on triangles with no `bad` corner.
+    /// winding number on triangles with no `bad` corner, as integers on a closed chain
+    /// ([`sampled_sides`]) or as sides of ½ with their margins where it is `open`
+    /// ([`sampled_halves`]; the margins are returned, 0 elsewhere).
     fn build(
         mesh: &SurfaceMesh,
         bvh: &Bvh,
         topology: &Topology,
         face_normals: &[Option<[f64; 3]>],
-        local: Option<(&[bool], &Local<'_>)>,
-    ) -> Pseudonormals {
+        local: Option<(&[bool], &Local<'_>, bool)>,
+    ) -> (Pseudonormals, Vec<[f64; 2]>) {
         let mut vertex_normals = vec![[0.0; 3]; mesh.num_vertices()];
         for (f, t) in mesh.triangles.iter().enumerate() {
             let Some(normal) = face_normals[f] else {
@@ -146,7 +186,7 @@ impl Pseudonormals {
                 vertex_normals[v] = add(vertex_normals[v], scale(normal, angle));
             }
         }
-        let (normals, sides) = bvh
+        let (normals, (sides, margins)): (Vec<_>, (Vec<_>, Vec<_>)) = bvh
             .faces
             .par_iter()
             .zip(&bvh.tris)
@@ -164,14 +204,22 @@ impl Pseudonormals {
                     out[4 + i] = vertex_normals[t[i] as usize];
                 }
                 let sides = match local {
-                    None => [1, -1],
-                    Some((bad, _)) if t.iter().any(|&v| bad[v as usize]) => [0, 0],
-                    Some((_, local)) => sampled_sides(tri, out[0], local.winding),
+                    None => ([1, -1], [0.0; 2]),
+                    Some((bad, _, _)) if t.iter().any(|&v| bad[v as usize]) => ([0, 0], [0.0; 2]),
+                    Some((_, local, false)) => {
+                        (sampled_sides(tri, out[0], local.winding), [0.0; 2])
+                    }
+                    Some((_, local, true)) => sampled_halves(tri, out[0], local.winding),
                 };
                 (out, sides)
             })
             .unzip();
-        Pseudonormals { normals, sides }
+        let pseudonormals = Pseudonormals {
+            normals,
+            sides,
+            open: None,
+        };
+        (pseudonormals, margins)
     }
 
     /// The sign (−1 inside, +1 outside) at `p` whose closest point `q` lies on the tree
@@ -208,15 +256,34 @@ impl Pseudonormals {
         if !(s.abs() > 1e-9 * scale_ && scale_ > 0.0) {
             return None;
         }
-        let side = self.sides[t][if s > 0.0 { 0 } else { 1 }];
-        (side != 0).then_some(side as f64)
+        let k = if s > 0.0 { 0 } else { 1 };
+        let side = self.sides[t][k];
+        if side == 0 {
+            return None;
+        }
+        if let Some(open) = &self.open {
+            // The change of the winding number from the samples to `p`: over the
+            // triangle (at most twice its extent), then along `p − q`, all within
+            // `clearance − |p − q|` of the unbalanced edges.
+            let along = norm(d);
+            let r = open.clearance[t] - along;
+            if r.is_nan() || r <= 0.0 {
+                return None;
+            }
+            let change = (2.0 * open.extent[t] + along) * open.length / (r * r) + FAST_ERROR;
+            if change.is_nan() || change >= open.margin[t][k] {
+                return None;
+            }
+        }
+        Some(side as f64)
     }
 }
 
-/// Whether every edge is used as often in one direction as in the other: then the
-/// triangles bound, and the winding number is an integer off the surface. (A
-/// degenerate triangle's self-loop side has no edge, and uses none.)
-fn is_closed_chain(mesh: &SurfaceMesh, topology: &Topology) -> bool {
+/// The edges used more often in one direction than in the other, with their ends and
+/// imbalance: none exactly when the triangles bound, and the winding number is an
+/// integer off the surface. (A degenerate triangle's self-loop side has no edge, and
+/// uses none.)
+fn unbalanced_edges(mesh: &SurfaceMesh, topology: &Topology) -> Vec<([f64; 3], [f64; 3], u32)> {
     let mut balance = vec![0i32; topology.num_edges()];
     for (f, t) in mesh.triangles.iter().enumerate() {
         for (i, &start) in t.iter().enumerate() {
@@ -229,7 +296,56 @@ fn is_closed_chain(mesh: &SurfaceMesh, topology: &Topology) -> bool {
             }
         }
     }
-    balance.iter().all(|&b| b == 0)
+    let at = |v: u32| mesh.positions[v as usize];
+    balance
+        .iter()
+        .enumerate()
+        .filter(|(_, &b)| b != 0)
+        .map(|(e, &b)| {
+            let [u, v] = topology.edges()[e];
+            (at(u), at(v), b.unsigned_abs())
+        })
+        .collect()
+}
+
+/// The bound's parts on every tree triangle of `bvh` (the [`OpenChain`]), with the
+/// samples' `margin`s ([`sampled_halves`]).
+fn open_chain(
+    bvh: &Bvh,
+    unbalanced: &[([f64; 3], [f64; 3], u32)],
+    margin: Vec<[f64; 2]>,
+) -> OpenChain {
+    let length = unbalanced
+        .iter()
+        .map(|&(a, b, k)| k as f64 * norm(sub(b, a)))
+        .sum::<f64>()
+        / (4.0 * std::f64::consts::PI);
+    // The unbalanced edges as degenerate triangles, for nearest-point queries.
+    let edges = Bvh::build(
+        unbalanced.iter().map(|&(a, b, _)| [a, b, b]).collect(),
+        (0..unbalanced.len() as u32).collect(),
+    );
+    let (clearance, extent) = bvh
+        .tris
+        .par_iter()
+        .map(|tri| {
+            let centroid = scale(add(add(tri[0], tri[1]), tri[2]), 1.0 / 3.0);
+            let extent = tri
+                .iter()
+                .map(|&c| norm(sub(c, centroid)))
+                .fold(0.0, f64::max);
+            let to_edges = edges
+                .nearest(centroid)
+                .map_or(f64::INFINITY, |n| n.2.sqrt());
+            (to_edges - extent, extent)
+        })
+        .unzip();
+    OpenChain {
+        length,
+        clearance,
+        extent,
+        margin,
+    }
 }
 
 /// The signs just in front of triangle `tri` (unit normal `n`) and just behind it, from
@@ -242,28 +358,13 @@ fn sampled_sides(
     n: [f64; 3],
     winding: &(dyn Fn([f64; 3]) -> f64 + Sync),
 ) -> [i8; 2] {
-    let [a, b, c] = *tri;
-    let area2 = norm(cross(sub(b, a), sub(c, a)));
-    let perimeter = norm(sub(b, a)) + norm(sub(c, b)) + norm(sub(a, c));
-    let inradius = area2 / perimeter;
-    let magnitude = tri.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    let offset = SAMPLE_OFFSET * inradius;
-    let too_thin = offset.is_nan() || offset <= 1e-9 * magnitude;
-    if n == [0.0; 3] || too_thin {
+    let Some(points) = sample_points(tri, n) else {
         return [0, 0];
-    }
-    let at = |w: [f64; 3]| add(add(scale(a, w[0]), scale(b, w[1])), scale(c, w[2]));
-    let third = 1.0 / 3.0;
-    let points = [
-        at([third; 3]),
-        at([0.6, 0.2, 0.2]),
-        at([0.2, 0.6, 0.2]),
-        at([0.2, 0.2, 0.6]),
-    ];
-    [1.0, -1.0].map(|direction| {
+    };
+    points.map(|points| {
         let mut value = None;
-        for &x in &points {
-            let w = winding(add(x, scale(n, direction * offset)));
+        for x in points {
+            let w = winding(x);
             let rounded = w.round();
             let off_integer =
                 (w - rounded).abs().is_nan() || (w - rounded).abs() > INTEGER_TOLERANCE;
@@ -279,4 +380,50 @@ fn sampled_sides(
             1
         }
     })
+}
+
+/// Where the triangles do not close: the side of ½ the winding number lies on just in
+/// front of `tri`'s centroid and just behind it (the first points of [`sampled_sides`]),
+/// and its distance from ½ (the margin).
+fn sampled_halves(
+    tri: &[[f64; 3]; 3],
+    n: [f64; 3],
+    winding: &(dyn Fn([f64; 3]) -> f64 + Sync),
+) -> ([i8; 2], [f64; 2]) {
+    let Some(points) = sample_points(tri, n) else {
+        return ([0, 0], [0.0; 2]);
+    };
+    let halves = points.map(|points| {
+        let w = winding(points[0]);
+        match w {
+            w if w >= 0.5 => (-1, w - 0.5),
+            w if w < 0.5 => (1, 0.5 - w),
+            _ => (0, 0.0), // NaN
+        }
+    });
+    ([halves[0].0, halves[1].0], [halves[0].1, halves[1].1])
+}
+
+/// The four sample points of [`sampled_sides`] in front of `tri` and behind it; `None`
+/// for a triangle without a normal or too thin for an offset above the rounding.
+fn sample_points(tri: &[[f64; 3]; 3], n: [f64; 3]) -> Option<[[[f64; 3]; 4]; 2]> {
+    let [a, b, c] = *tri;
+    let area2 = norm(cross(sub(b, a), sub(c, a)));
+    let perimeter = norm(sub(b, a)) + norm(sub(c, b)) + norm(sub(a, c));
+    let inradius = area2 / perimeter;
+    let magnitude = tri.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    let offset = SAMPLE_OFFSET * inradius;
+    let too_thin = offset.is_nan() || offset <= 1e-9 * magnitude;
+    if n == [0.0; 3] || too_thin {
+        return None;
+    }
+    let at = |w: [f64; 3]| add(add(scale(a, w[0]), scale(b, w[1])), scale(c, w[2]));
+    let third = 1.0 / 3.0;
+    let points = [
+        at([third; 3]),
+        at([0.6, 0.2, 0.2]),
+        at([0.2, 0.6, 0.2]),
+        at([0.2, 0.2, 0.6]),
+    ];
+    Some([1.0, -1.0].map(|direction| points.map(|x| add(x, scale(n, direction * offset)))))
 }

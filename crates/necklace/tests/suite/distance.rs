@@ -416,6 +416,58 @@ fn the_pseudonormal_sign_agrees_with_the_winding_number() {
     assert!(!SurfaceDistance::new(&open).use_pseudonormal_sign(&open));
 }
 
+#[test]
+fn the_pseudonormal_sign_holds_on_open_surfaces_away_from_their_holes() {
+    // A sphere with a small hole (the faces round one vertex removed) and one with a
+    // large one (every face above z = 0.5). The winding number is not an integer off
+    // them; the solid is where the exact one is at least ½ (the hole spanned by a cap).
+    // Triangles far enough from the hole decide by their pseudonormal, the others by
+    // the winding number, and every sign matches the exact winding number's.
+    let mut small = sphere(16.0);
+    let pole = (0..small.positions.len())
+        .max_by(|&a, &b| small.positions[a][2].total_cmp(&small.positions[b][2]))
+        .unwrap() as u32;
+    small.triangles.retain(|t| !t.contains(&pole));
+    let mut large = sphere(16.0);
+    let positions = large.positions.clone();
+    large
+        .triangles
+        .retain(|t| t.iter().all(|&v| positions[v as usize][2] < 0.5));
+    for (name, mesh) in [("small hole", small), ("large hole", large)] {
+        let reference = SurfaceDistance::new(&mesh);
+        let mut local = SurfaceDistance::new(&mesh).recording(Vec::new());
+        assert!(
+            local.use_pseudonormal_sign(&mesh),
+            "{name}: no triangle decides locally"
+        );
+        let mut random = uniform(5);
+        let mut checked = 0;
+        for i in 0..4000 {
+            let p = if i % 2 == 0 {
+                let v = mesh.positions[(random() * mesh.positions.len() as f64) as usize];
+                [0, 1, 2].map(|k| v[k] + 2e-2 * (random() - 0.5))
+            } else {
+                [0, 1, 2].map(|_| 3.0 * (random() - 0.5))
+            };
+            let exact = reference.winding_number_exact(p);
+            if (exact - 0.5).abs() < 0.05 {
+                continue; // on the cap, up to the fast winding number's error
+            }
+            let a = local.signed_distance(p);
+            if a.abs() < 1e-9 {
+                continue;
+            }
+            assert_eq!(
+                a < 0.0,
+                exact >= 0.5,
+                "{name} at {p:?}: {a}, winding {exact}"
+            );
+            checked += 1;
+        }
+        assert!(checked > 3500, "{name}: {checked}");
+    }
+}
+
 /// A sphere of radius `r` about `c`, its faces turned inward when `inward` (a cavity).
 fn ball(r: f64, c: [f64; 3], inward: bool) -> SurfaceMesh {
     let mut m = sphere(24.0);
