@@ -12,7 +12,9 @@
 //! angle-weighted pseudonormal wherever that decides it
 //! ([`SurfaceDistance::use_pseudonormal_sign`]: everywhere on a closed manifold that does
 //! not cross itself; where it crosses itself or has non-manifold vertices, on each
-//! triangle away from them whose side winding numbers, read once at four points, agree).
+//! triangle away from them whose side winding numbers, read once at four points, agree;
+//! where it has holes, on each triangle far enough from them for a bound on the winding
+//! number's change).
 //! A dense input the pipeline simplifies is built [`SurfaceDistance::without_winding`] (no
 //! winding expansions, no pseudonormals: the stages that ask signs work on the copy;
 //! [`SurfaceDistance::add_winding`] adds the expansions); [`SurfaceDistance::recording`]
@@ -206,10 +208,11 @@ impl SurfaceDistance {
     /// surface. `mesh` must be the mesh this was built from. Without crossings recorded
     /// ([`SurfaceDistance::recording`]) the caller vouches that it does not cross itself,
     /// and the mesh qualifies when it is closed, manifold and consistently oriented.
-    /// With crossings recorded (or a few non-manifold vertices) and the winding
-    /// number's expansions built, every triangle away from them that its winding
-    /// number confirms decides locally, and the others leave the sign to the winding
-    /// number (`pseudonormal`). Returns whether any triangle decides by its
+    /// With crossings recorded (or a few non-manifold vertices, or holes) and the
+    /// winding number's expansions built, every triangle away from them that its
+    /// winding number confirms decides locally (near holes, only within a bound on the
+    /// winding number's change), and the others leave the sign to the winding number
+    /// (`pseudonormal`). Returns whether any triangle decides by its
     /// pseudonormal (the sign stays on the winding number otherwise).
     pub fn use_pseudonormal_sign(&mut self, mesh: &SurfaceMesh) -> bool {
         let pseudonormals = match (&self.crossings, &self.expansions) {

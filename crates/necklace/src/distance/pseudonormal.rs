@@ -89,7 +89,8 @@ impl Pseudonormals {
     /// self-crossings, which the caller must rule out). With `local` on a surface that
     /// meets those conditions and has no crossing, the same; otherwise the triangles
     /// away from crossings and defects decide locally (see the module doc), and `None`
-    /// when the triangles are not a closed chain or none decides.
+    /// when none decides (on triangles that do not close, within the bound of the
+    /// module doc).
     pub fn new(mesh: &SurfaceMesh, bvh: &Bvh, local: Option<Local<'_>>) -> Option<Pseudonormals> {
         if bvh.faces.len() != mesh.triangles.len() {
             return None;
