@@ -104,8 +104,9 @@ pub use sampled::SampledStats;
 use sizing::clamp_spacing;
 pub use sizing::{spacing_floor, SizingFeature};
 pub use surface::{
-    default_h, survey_surface, volume_mesh, volume_mesh_surveyed, volume_mesh_with, Mesher,
-    SurfaceSurvey, TopologyCheck, VolumeOptions, VolumeReport, VolumeResult, MAX_ROUNDS,
+    default_h, survey_surface, volume_mesh, volume_mesh_surveyed, volume_mesh_with,
+    volume_mesh_within, Mesher, SurfaceSurvey, TopologyCheck, VolumeOptions, VolumeReport,
+    VolumeResult, MAX_ROUNDS,
 };
 
 /// Options of the stuffing mesher.
@@ -711,11 +712,15 @@ fn build_octree(
             .zip(&decisions)
             .filter(|&(cell, &split)| !split && !dead.contains(cell))
             .count();
-        // The next level has eight cells for each split one; a level of more cells
-        // than sixteen times the leaves allowed is not built.
-        let next = 8 * decisions.iter().filter(|&&d| d).count();
-        if leaves_so_far > max_leaves || next > 16 * max_leaves {
-            too_big = Some(leaves_so_far.max(next / 16));
+        // The next level has eight cells for each split one, and a split cell is
+        // counted as one leaf more (it was split where the boundary may pass or a
+        // thin part asks, so it leaves at least one leaf that gives tets, but for a
+        // thin part's split wholly outside): past the leaves allowed, the next level
+        // is not built (a level costs a distance per cell; figures in
+        // `docs/decisions.md`, Volume mesh).
+        let split = decisions.iter().filter(|&&d| d).count();
+        if leaves_so_far + split > max_leaves {
+            too_big = Some(leaves_so_far + split);
         }
         decisions
     });
