@@ -71,14 +71,16 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use crate::distance::SurfaceDistance;
-use crate::error::{Error, Result};
+use crate::error::{Error, ErrorKind, Result};
 use crate::loops::{self, LoopOptions, LoopResult, LoopSurface, NeckLoop, Role, Seed};
 use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::{self, MorseOptions, MorseResult, Saddle, SaddleRole, Schedule};
 use crate::progress::{Lane, Progress, Silent};
 use crate::simplify::SimplifyOptions;
 use crate::tet::{TetMesh, VertexKind};
-use crate::volume::{survey_surface, volume_mesh_surveyed, SurfaceSurvey, VolumeOptions};
+use crate::volume::{
+    survey_surface, volume_mesh_within, SurfaceSurvey, VolumeOptions, VolumeResult,
+};
 
 pub use critical::{
     critical_points, critical_points_with, find_critical_points, morse_options_for,
@@ -143,6 +145,12 @@ pub struct NeckOptions {
     pub simplify: SimplifyOptions,
     /// The input step: which corners are welded ([`InputOptions`]).
     pub input: InputOptions,
+    /// Mesh each side of a surface whose genus is known within a sixteenth, then a
+    /// quarter of its memory budget before the whole, keeping the first mesh whose
+    /// budget did not bind or whose topology and loop rank match the surface's (default
+    /// true; false meshes within the whole budget at once). The budget floors the cells
+    /// of thin parts: on real models it, not the surface, sets the mesh's size.
+    pub budget_steps: bool,
 }
 
 impl Default for NeckOptions {
@@ -157,6 +165,7 @@ impl Default for NeckOptions {
             sides_at_once: true,
             simplify: SimplifyOptions::default(),
             input: InputOptions::default(),
+            budget_steps: true,
         }
     }
 }
@@ -343,9 +352,32 @@ struct Carry<'a> {
     surface: OnceLock<LoopSurface>,
 }
 
+/// The smallest budget [`budget_steps`] tries first: 100 MB, 250 000 tets.
+const SMALLEST_STEP: u64 = 100_000_000;
+
+/// The memory budgets a side is meshed within, smallest first: with `steps`, a
+/// sixteenth and a quarter of `max_memory` (those of at least [`SMALLEST_STEP`]) before
+/// `max_memory` itself.
+fn budget_steps(max_memory: u64, steps: bool) -> Vec<u64> {
+    let mut budgets: Vec<u64> = [max_memory / 16, max_memory / 4]
+        .into_iter()
+        .filter(|&b| steps && b >= SMALLEST_STEP)
+        .collect();
+    budgets.push(max_memory);
+    budgets
+}
+
 /// One side of the method on a prepared surface, meshed from the run's `survey`: steps
 /// 2–6 of [`find_necks`]; with `carry`, the loops carried back to the input. `None`
 /// when `stop` was raised (the other side failed) before one of its stages.
+///
+/// With [`NeckOptions::budget_steps`] and a surface whose genus is known, the side is
+/// meshed within a sixteenth, then a quarter of its budget before the whole
+/// ([`budget_steps`]), and the first result is kept whose budget did not bind, or whose
+/// volume topology and loop rank match the surface's: the budget floors the cells of
+/// thin parts, and a part thinner than the floor is where a mesh loses the topology.
+/// A step whose budget bound without a topology to check it by is not analysed; the
+/// steps' time is in the side's timings, and a note says which step was kept and why.
 fn find_side(
     prepared: &PreparedSurface,
     carry: Option<&Carry>,
@@ -356,21 +388,123 @@ fn find_side(
     stop: &AtomicBool,
 ) -> Result<Option<SideRun>> {
     let stopped = || stop.load(Ordering::Relaxed);
+    let name = side.name();
+    let genus = prepared
+        .mesh_report
+        .component_details
+        .iter()
+        .map(|c| c.genus)
+        .sum::<Option<i64>>();
+    // Steps only where the mesh's topology can be checked: a genus, and no crossings.
+    let checkable = genus.is_some() && prepared.distance.crossings().is_none_or(<[_]>::is_empty);
+    let budget = survey.options.max_memory;
+    let budgets = budget_steps(budget, options.budget_steps && checkable);
+    let mut spent = StageTimings::default();
+    let mut notes = Vec::new();
+    for (i, &within) in budgets.iter().enumerate() {
+        let last = i + 1 == budgets.len();
+        let mut clock = Stopwatch::start();
+        // 2. The volume mesh of this side.
+        progress.start("volume mesh", 0);
+        let volume = volume_mesh_within(
+            &prepared.mesh,
+            &prepared.distance,
+            survey,
+            side,
+            within,
+            !last,
+        );
+        progress.finish();
+        let volume_seconds = clock.lap();
+        if stopped() {
+            return Ok(None);
+        }
+        let step = format!(
+            "{name}: within {} of its budget of {} (--max-memory)",
+            crate::volume::memory_text(within as f64),
+            crate::volume::memory_text(budget as f64)
+        );
+        let next =
+            || crate::volume::memory_text(budgets.get(i + 1).copied().unwrap_or(budget) as f64);
+        let volume = match volume {
+            Err(e) if !last && e.kind() == ErrorKind::OverBudget => {
+                notes.push(format!(
+                    "{step} {}: meshed again within {}",
+                    e.message(),
+                    next()
+                ));
+                spent.volume_mesh += volume_seconds;
+                spent.total += volume_seconds;
+                continue;
+            }
+            volume => volume?,
+        };
+        if !last && volume.budget_bound && volume.topology.matches != Some(true) {
+            notes.push(match volume.topology.matches {
+                None => format!(
+                    "{step} the budget bound the volume mesh, and the surface predicts no topology to check it by: meshed again within {}",
+                    next()
+                ),
+                _ => format!(
+                    "{step} the budget bound the volume mesh and its topology differs from the surface's: meshed again within {}",
+                    next()
+                ),
+            });
+            spent.volume_mesh += volume_seconds;
+            spent.total += volume_seconds;
+            continue;
+        }
+        let Some(mut run) = analyse_side(
+            prepared, carry, side, options, progress, stop, volume, genus, clock,
+        )?
+        else {
+            return Ok(None);
+        };
+        run.report.timings.volume_mesh = volume_seconds;
+        let bound = run.report.volume.budget_bound;
+        let homology = run.report.homology;
+        if last || !bound || homology.ok {
+            if bound && !last {
+                notes.push(format!(
+                    "{step} the budget floored the cells of thin parts, and the volume's topology and the {} loops' Z2 rank ({}) match the surface's: the finer meshes the budget allows were not made (--no-budget-steps makes them)",
+                    side.neck_name(),
+                    homology.rank
+                ));
+            }
+            run.report.timings.add(&spent);
+            run.notes = notes;
+            return Ok(Some(run));
+        }
+        notes.push(format!(
+            "{step} the {} loops have Z2 rank {} for genus {}: meshed again within {}",
+            side.neck_name(),
+            homology.rank,
+            genus.unwrap_or_default(),
+            next()
+        ));
+        spent.add(&run.report.timings);
+    }
+    unreachable!("the last budget step always returns")
+}
+
+/// Steps 3–6 of [`find_side`] on the side's `volume` mesh (made in the first lap of
+/// `clock`): the distance field, the Morse stage, the loops and the checks.
+#[allow(clippy::too_many_arguments)]
+fn analyse_side(
+    prepared: &PreparedSurface,
+    carry: Option<&Carry>,
+    side: Side,
+    options: &NeckOptions,
+    progress: &dyn Progress,
+    stop: &AtomicBool,
+    volume: VolumeResult,
+    genus: Option<i64>,
+    mut clock: Stopwatch,
+) -> Result<Option<SideRun>> {
+    let stopped = || stop.load(Ordering::Relaxed);
     let surface = &prepared.mesh;
     let name = side.name();
-    let mut clock = Stopwatch::start();
-    let mut warnings = Vec::new();
-
-    // 2. The volume mesh of this side.
-    progress.start("volume mesh", 0);
-    let volume = volume_mesh_surveyed(surface, &prepared.distance, survey, side);
-    progress.finish();
-    let volume = volume?;
-    warnings.extend(volume.warnings.iter().cloned());
-    let volume_seconds = clock.lap();
-    if stopped() {
-        return Ok(None);
-    }
+    let mut warnings = volume.warnings.clone();
 
     // 3. The exact distance to the surface on its vertices.
     progress.start("distance", 0);
@@ -419,12 +553,6 @@ fn find_side(
         options: &loop_options,
         progress,
     };
-    let genus = prepared
-        .mesh_report
-        .component_details
-        .iter()
-        .map(|c| c.genus)
-        .sum::<Option<i64>>();
     let (found, completed_with) = match genus.filter(|_| loop_options.homology_selection) {
         Some(g) => loops_to_genus(
             &cutter,
@@ -487,7 +615,7 @@ fn find_side(
     // before is analysed) from critical points (the rest of it).
     let smoothing = result.timings.assembly + result.timings.smoothing;
     let timings = StageTimings {
-        volume_mesh: volume_seconds,
+        volume_mesh: 0.0,
         distance: distance_seconds,
         smoothing,
         critical_points: morse_seconds - smoothing,
@@ -515,6 +643,7 @@ fn find_side(
         loops: found.loops,
         dropped: found.dropped,
         warnings,
+        notes: Vec::new(),
     }))
 }
 
@@ -637,5 +766,20 @@ impl Stopwatch {
     /// Seconds from the start to the last lap: the sum of the laps.
     fn total(&self) -> f64 {
         (self.last - self.start).as_secs_f64()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budget_steps_are_a_sixteenth_and_a_quarter_then_the_whole_above_the_smallest() {
+        let g = 1_000_000_000;
+        assert_eq!(budget_steps(4 * g, true), vec![g / 4, g, 4 * g]);
+        assert_eq!(budget_steps(4 * g, false), vec![4 * g]);
+        // A sixteenth of 1 GB is below the smallest step: a quarter, then the whole.
+        assert_eq!(budget_steps(g, true), vec![g / 4, g]);
+        assert_eq!(budget_steps(SMALLEST_STEP, true), vec![SMALLEST_STEP]);
     }
 }

@@ -61,7 +61,7 @@ pub struct StageTimings {
 }
 
 impl StageTimings {
-    fn add(&mut self, other: &StageTimings) {
+    pub(super) fn add(&mut self, other: &StageTimings) {
         self.volume_mesh += other.volume_mesh;
         self.distance += other.distance;
         self.smoothing += other.smoothing;
@@ -226,6 +226,7 @@ pub(super) struct SideRun {
     pub loops: Vec<NeckLoop>,
     pub dropped: Vec<DroppedLoop>,
     pub warnings: Vec<String>,
+    pub notes: Vec<String>,
 }
 
 impl NeckReport {
@@ -271,6 +272,7 @@ impl NeckReport {
         }));
         self.loops.extend(side.loops);
         self.warnings.extend(side.warnings);
+        self.notes.extend(side.notes);
         self.morse.push(side.morse);
         let timings = side.report.timings;
         self.timings.total.add(&timings);

@@ -130,6 +130,12 @@ pub struct VolumeResult {
     pub sphere: Option<([f64; 3], f64)>,
     /// The mesher used.
     pub mesher: Mesher,
+    /// The memory budget it was meshed within, bytes.
+    pub budget: u64,
+    /// Whether that budget bound: it floored the cells of thin parts in one of the
+    /// meshings, or refused a meshing the topology rounds asked for (a larger budget
+    /// may give another mesh; when false, any larger budget gives this mesh).
+    pub budget_bound: bool,
     /// The stuffing mesher's counts of the last round (`None` for TetGen).
     pub stats: Option<StuffingStats>,
     /// What the sampled mesher did (with [`Mesher::Sampled`]).
@@ -213,6 +219,12 @@ pub struct VolumeReport {
     pub volume: f64,
     /// The mesher used.
     pub mesher: Mesher,
+    /// The memory budget it was meshed within, bytes.
+    #[serde(default)]
+    pub budget: u64,
+    /// Whether that budget bound (see [`VolumeResult::budget_bound`]).
+    #[serde(default)]
+    pub budget_bound: bool,
     /// Lattice spacing along the surface (stuffing).
     pub h: f64,
     /// Smallest cell used (thin parts; stuffing).
@@ -275,6 +287,8 @@ impl VolumeResult {
             hausdorff_to_surface: self.hausdorff_to_surface,
             volume: m.volume(),
             mesher: self.mesher,
+            budget: self.budget,
+            budget_bound: self.budget_bound,
             h: self.h,
             finest_cell: self.stats.map_or(0.0, |s| s.finest_cell),
             thin_vertices: self.thin_vertices,
@@ -423,8 +437,34 @@ pub fn volume_mesh_surveyed(
     survey: &SurfaceSurvey,
     side: Side,
 ) -> Result<VolumeResult> {
+    volume_mesh_within(
+        surface,
+        distance,
+        survey,
+        side,
+        survey.options.max_memory,
+        false,
+    )
+}
+
+/// [`volume_mesh_surveyed`] within a memory budget of `max_memory` bytes instead of the
+/// survey's, for a caller that tries a smaller budget first:
+/// [`VolumeResult::budget_bound`] says whether a larger one could give another mesh, and
+/// with `stop_when_bound` a meshing the budget binds ends the rounds that mesh again
+/// for the topology (the caller meshes again within more).
+pub fn volume_mesh_within(
+    surface: &SurfaceMesh,
+    distance: &SurfaceDistance,
+    survey: &SurfaceSurvey,
+    side: Side,
+    max_memory: u64,
+    stop_when_bound: bool,
+) -> Result<VolumeResult> {
     let start = Instant::now();
-    let options = &survey.options;
+    let options = &VolumeOptions {
+        max_memory,
+        ..survey.options
+    };
     let h = survey.h;
     let (lo, hi) = check_surface(surface)?;
     let diagonal = norm(sub(hi, lo));
@@ -443,6 +483,7 @@ pub fn volume_mesh_surveyed(
         None
     };
     let mut sampled = None;
+    let mut budget_bound = false;
     let (mesh, found, stats, rounds, samples) = match &survey.sizing {
         Some(sizing) if options.mesher == Mesher::Sampled => {
             let sphere = (side == Side::Outside).then_some((centre, radius));
@@ -459,7 +500,7 @@ pub fn volume_mesh_surveyed(
         }
         Some(sizing) => {
             let sphere = (side == Side::Outside).then_some((centre, radius));
-            let (stuffed, found, rounds, samples) = stuff_surface(
+            let (meshed, samples) = stuff_surface(
                 surface,
                 distance,
                 sizing,
@@ -467,9 +508,18 @@ pub fn volume_mesh_surveyed(
                 h,
                 options,
                 &expected,
+                stop_when_bound,
                 &mut warnings,
             )?;
-            (stuffed.mesh, found, Some(stuffed.stats), rounds, samples)
+            budget_bound = meshed.budget_bound;
+            let stuffed = meshed.mesh;
+            (
+                stuffed.mesh,
+                meshed.found,
+                Some(stuffed.stats),
+                meshed.rounds,
+                samples,
+            )
         }
         None => {
             let mesh = tetgen_mesh(surface, side, centre, radius)?;
@@ -540,6 +590,8 @@ pub fn volume_mesh_surveyed(
         h,
         sphere: (side == Side::Outside).then_some((centre, radius)),
         mesher: options.mesher,
+        budget: options.max_memory,
+        budget_bound,
         stats,
         sampled,
         thin_vertices: survey.thin_vertices,
@@ -692,8 +744,9 @@ fn stuff_surface(
     h: f64,
     options: &VolumeOptions,
     expected: &Option<TetTopology>,
+    stop_when_bound: bool,
     warnings: &mut Vec<String>,
-) -> Result<(VolumeMesh, TetTopology, usize, usize)> {
+) -> Result<(Meshed, usize)> {
     let mut spacing = surveyed.spacing.clone();
     let stuffing = StuffingOptions {
         h,
@@ -723,9 +776,15 @@ fn stuff_surface(
             Some((centre, radius)) => stuff_volume(&Shell::new(inside, centre, radius), &stuffing),
         }
     };
-    let (stuffed, found, rounds, sampled) =
-        mesh_until_topology_matches(surface, &stuff, &mut spacing, expected, warnings)?;
-    let samples = if sampled {
+    let meshed = mesh_until_topology_matches(
+        surface,
+        &stuff,
+        &mut spacing,
+        expected,
+        stop_when_bound,
+        warnings,
+    )?;
+    let samples = if meshed.sampled {
         let sampled = surveyed.sampled(surface, distance);
         if sampled.bound {
             warnings.push(format!(
@@ -737,7 +796,7 @@ fn stuff_surface(
     } else {
         0
     };
-    Ok((stuffed, found, rounds, samples))
+    Ok((meshed, samples))
 }
 
 /// Mesh, compare with the prediction, and while the topology differs: mesh again sized
@@ -747,19 +806,28 @@ fn stuff_surface(
 /// most [`MAX_ROUNDS`] meshings), keeping the mesh closest to the prediction; a round
 /// that moves away from it ends the rounds. `spacing[v]` is the cell size asked for at
 /// surface vertex `v` (halved where a round refines). A meshing the budget refuses ends
-/// the rounds with the best mesh so far, and says so in `warnings`. Returns the mesh,
+/// the rounds with the best mesh so far, and says so in `warnings`; with
+/// `stop_when_bound`, so does any meshing the budget floored. Returns the mesh,
 /// its topology, the meshings, and whether it was sized by the samples.
 fn mesh_until_topology_matches(
     surface: &SurfaceMesh,
     stuff: &dyn Fn(bool, &[SizingFeature]) -> Result<VolumeMesh>,
     spacing: &mut [f64],
     expected: &Option<TetTopology>,
+    stop_when_bound: bool,
     warnings: &mut Vec<String>,
-) -> Result<(VolumeMesh, TetTopology, usize, bool)> {
+) -> Result<Meshed> {
     let stuffed = stuff(false, &[])?;
     let found = stuffed.mesh.topology();
+    let mut budget_bound = stuffed.stats.spacing_floor.is_some();
     let Some(expected) = expected else {
-        return Ok((stuffed, found, 1, false));
+        return Ok(Meshed {
+            mesh: stuffed,
+            found,
+            rounds: 1,
+            sampled: false,
+            budget_bound,
+        });
     };
     let mut best_distance = topology_distance(&found, expected);
     let mut best = (stuffed, found, false);
@@ -770,12 +838,15 @@ fn mesh_until_topology_matches(
             e.message()
         ))
     };
-    if best_distance > 0 {
+    // A caller that meshes again within a larger budget takes the meshing the
+    // budget bound as it is: rounds within the same budget are its cost again.
+    if best_distance > 0 && !(stop_when_bound && budget_bound) {
         // Tried even where the budget floored the first: the sampled sizing may ask
         // for fewer cells (a rim's over its own area only).
         rounds += 1;
         match stuff(true, &[]) {
             Ok(next) => {
+                budget_bound |= next.stats.spacing_floor.is_some();
                 let found = next.mesh.topology();
                 let distance = topology_distance(&found, expected);
                 if distance < best_distance {
@@ -783,7 +854,10 @@ fn mesh_until_topology_matches(
                     best = (next, found, true);
                 }
             }
-            Err(e) if e.kind() == ErrorKind::OverBudget => budget_stop(warnings, &e),
+            Err(e) if e.kind() == ErrorKind::OverBudget => {
+                budget_bound = true;
+                budget_stop(warnings, &e);
+            }
             Err(e) => return Err(e),
         }
     }
@@ -791,7 +865,8 @@ fn mesh_until_topology_matches(
     let floored = best.0.stats.spacing_floor.is_some();
     let sampled = best.2;
     let mut extra = Vec::new();
-    while best_distance > 0 && rounds < MAX_ROUNDS && !floored {
+    while best_distance > 0 && rounds < MAX_ROUNDS && !floored && !(stop_when_bound && budget_bound)
+    {
         let refine = unresolved_features(surface, &best.0, spacing);
         if refine.is_empty() {
             break;
@@ -801,11 +876,13 @@ fn mesh_until_topology_matches(
         let next = match stuff(sampled, &extra) {
             Ok(next) => next,
             Err(e) if e.kind() == ErrorKind::OverBudget => {
+                budget_bound = true;
                 budget_stop(warnings, &e);
                 break;
             }
             Err(e) => return Err(e),
         };
+        budget_bound |= next.stats.spacing_floor.is_some();
         let found = next.mesh.topology();
         let distance = topology_distance(&found, expected);
         if distance > best_distance {
@@ -816,7 +893,24 @@ fn mesh_until_topology_matches(
             best = (next, found, sampled);
         }
     }
-    Ok((best.0, best.1, rounds, best.2))
+    Ok(Meshed {
+        mesh: best.0,
+        found: best.1,
+        rounds,
+        sampled: best.2,
+        budget_bound,
+    })
+}
+
+/// What [`mesh_until_topology_matches`] made: the mesh kept, its topology, the
+/// meshings, whether it was sized by the samples, and whether the budget bound any of
+/// the meshings (floored its thin parts' cells, or refused it).
+struct Meshed {
+    mesh: VolumeMesh,
+    found: TetTopology,
+    rounds: usize,
+    sampled: bool,
+    budget_bound: bool,
 }
 
 /// Refuse at once when the budget floors the spacing above the thickness of every part
