@@ -303,12 +303,13 @@ pub struct NeckArgs {
     /// "options" table of docs/benchmarks.md).
     #[arg(long)]
     pub one_side_at_a_time: bool,
-    /// Mesh each side within its whole memory budget at once. By default a surface
-    /// whose genus is known is meshed within a sixteenth, then a quarter of it first,
-    /// and the first mesh is kept whose budget did not bind or whose topology and loop
-    /// rank match the surface's.
+    /// Mesh each side of a surface whose genus is known (and that does not cross
+    /// itself) within a sixteenth, then a quarter of its memory budget before the
+    /// whole, and keep the first mesh whose budget did not bind or whose topology and
+    /// loop rank match the surface's: far faster where slivers make the budget bind,
+    /// but such a mesh can miss necks in thin parts that do not change the ranks.
     #[arg(long)]
-    pub no_budget_steps: bool,
+    pub budget_steps: bool,
     /// Simplify a surface with more triangles than this (0: never) for the volume
     /// mesh, distance field and saddles; the loops are cut again with the same
     /// planes and tightened on the input.
@@ -357,7 +358,7 @@ impl NeckArgs {
             morse: self.method.morse(),
             keep_volume,
             sides_at_once: !self.one_side_at_a_time,
-            budget_steps: !self.no_budget_steps,
+            budget_steps: self.budget_steps,
             input: self.method.input.options(),
             simplify: SimplifyOptions {
                 above: self.simplify_above,

@@ -168,11 +168,7 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
             "one_side_at_a_time",
             !NeckOptions::default().sides_at_once,
         )?,
-        budget_steps: !option(
-            options,
-            "no_budget_steps",
-            !NeckOptions::default().budget_steps,
-        )?,
+        budget_steps: option(options, "budget_steps", NeckOptions::default().budget_steps)?,
     })
 }
 
@@ -502,7 +498,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("max_flatness", options.loops.max_flatness)?;
     out.set_item("volume", options.keep_volume)?;
     out.set_item("one_side_at_a_time", !options.sides_at_once)?;
-    out.set_item("no_budget_steps", !options.budget_steps)?;
+    out.set_item("budget_steps", options.budget_steps)?;
     out.set_item("simplify_above", options.simplify.above)?;
     out.set_item("simplify_to", options.simplify.target)?;
     out.set_item("weld", options.input.weld.unwrap_or(0.0))?;

@@ -408,7 +408,7 @@ def find_necks(
     max_flatness: float = 3.0,
     volume: bool = False,
     one_side_at_a_time: bool = False,
-    no_budget_steps: bool = False,
+    budget_steps: bool = False,
     simplify_above: int = 200_000,
     simplify_to: int = 30_000,
     weld: float = 1e-08,
@@ -455,10 +455,11 @@ def find_necks(
         one_side_at_a_time: run the two sides one after the other instead of at
             the same time: slower, with the larger side's peak memory instead of
             both sides'; the same results.
-        no_budget_steps: mesh each side within its whole budget at once. By
-            default a surface whose genus is known is meshed within a sixteenth, then
-            a quarter of it first, and the first mesh is kept whose budget did not bind
-            or whose topology and loop rank match the surface's (``notes`` says which).
+        budget_steps: mesh each side of a surface whose genus is known within a
+            sixteenth, then a quarter of its budget first, and keep the first mesh
+            whose budget did not bind or whose topology and loop rank match the
+            surface's (``notes`` says which): faster where slivers make the budget
+            bind, but such a mesh can miss necks that do not change the ranks.
         simplify_above: a closed surface with more triangles than this (0: never)
             is simplified for the volume mesh, field and saddles, and each loop is cut
             again and tightened on the input (``to_dict()["simplified"]`` says what
@@ -505,7 +506,7 @@ def find_necks(
         max_flatness=max_flatness,
         volume=volume,
         one_side_at_a_time=one_side_at_a_time,
-        no_budget_steps=no_budget_steps,
+        budget_steps=budget_steps,
         simplify_above=simplify_above,
         simplify_to=simplify_to,
         weld=weld,

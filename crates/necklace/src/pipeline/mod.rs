@@ -148,8 +148,10 @@ pub struct NeckOptions {
     /// Mesh each side of a surface whose genus is known within a sixteenth, then a
     /// quarter of its memory budget before the whole, keeping the first mesh whose
     /// budget did not bind or whose topology and loop rank match the surface's (default
-    /// true; false meshes within the whole budget at once). The budget floors the cells
-    /// of thin parts: on real models it, not the surface, sets the mesh's size.
+    /// false: within the whole budget at once). The budget floors the cells of thin
+    /// parts: on real models it, not the surface, sets the mesh's size; but a coarse
+    /// mesh with the right topology and ranks can still miss necks (the buckyball's
+    /// 90 sticks), so the steps are asked for.
     pub budget_steps: bool,
 }
 
@@ -165,7 +167,7 @@ impl Default for NeckOptions {
             sides_at_once: true,
             simplify: SimplifyOptions::default(),
             input: InputOptions::default(),
-            budget_steps: true,
+            budget_steps: false,
         }
     }
 }
@@ -466,7 +468,7 @@ fn find_side(
         if last || !bound || homology.ok {
             if bound && !last {
                 notes.push(format!(
-                    "{step} the budget floored the cells of thin parts, and the volume's topology and the {} loops' Z2 rank ({}) match the surface's: the finer meshes the budget allows were not made (--no-budget-steps makes them)",
+                    "{step} the budget floored the cells of thin parts, and the volume's topology and the {} loops' Z2 rank ({}) match the surface's: the finer meshes the budget allows were not made (without --budget-steps they are)",
                     side.neck_name(),
                     homology.rank
                 ));

@@ -417,7 +417,7 @@ fn the_sampled_mesher_carves_clean_surfaces_along_them_and_reports_where_it_cann
 #[test]
 fn a_side_meshed_within_a_step_of_its_budget_keeps_the_surfaces_topology_and_loop_ranks() {
     // th_65004.stl: a genus-2 Thingi10K part whose slivers ask for cells the budget
-    // floors. Meshed within a sixteenth of each side's budget first, both sides keep
+    // floors. With budget steps, meshed within a sixteenth of each side's budget first, both sides keep
     // that mesh only because its topology and the loops' Z2 rank match the surface's
     // (genus 2), and a note says which budget was kept; the whole budget is not used.
     let path = crate::common::realworld_dir().join("th_65004.stl");
@@ -426,7 +426,10 @@ fn a_side_meshed_within_a_step_of_its_budget_keeps_the_surfaces_topology_and_loo
         return;
     }
     let surface = io::read_mesh(&path).unwrap();
-    let options = necklace::pipeline::NeckOptions::default();
+    let options = necklace::pipeline::NeckOptions {
+        budget_steps: true,
+        ..necklace::pipeline::NeckOptions::default()
+    };
     let report = necklace::pipeline::find_necks(&surface, &options).unwrap();
     let per_side = options.volume.max_memory / 2;
     for side in &report.sides {
