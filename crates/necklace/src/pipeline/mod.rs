@@ -150,8 +150,8 @@ pub struct NeckOptions {
     /// budget did not bind or whose topology and loop rank match the surface's (default
     /// false: within the whole budget at once). The budget floors the cells of thin
     /// parts: on real models it, not the surface, sets the mesh's size; but a coarse
-    /// mesh with the right topology and ranks can still miss necks (the buckyball's
-    /// 90 sticks), so the steps are asked for.
+    /// mesh with the right topology and ranks can still miss necks (one of the
+    /// buckyball's 32 windows), so the steps are asked for.
     pub budget_steps: bool,
 }
 
