@@ -106,6 +106,12 @@ pub struct SurfaceDistance {
     pseudonormals: Option<std::sync::Arc<Pseudonormals>>,
     /// Bounding-box diagonal of the usable triangles (the length scale of tolerances).
     scale: f64,
+    /// Whether the triangles form a closed chain (every edge used as often in each
+    /// direction, no triangle left out), as found by
+    /// [`SurfaceDistance::use_pseudonormal_sign`]: the winding number is then an
+    /// integer off the surface and its sign changes only across the surface. False
+    /// until then.
+    closed_chain: bool,
     /// The crossing pairs of the mesh, when found once for all
     /// ([`SurfaceDistance::of_surface`], [`SurfaceDistance::with_crossings`]).
     crossings: Option<std::sync::Arc<Vec<[u32; 2]>>>,
@@ -159,6 +165,7 @@ impl SurfaceDistance {
             expansions: None,
             pseudonormals: None,
             scale,
+            closed_chain: false,
             crossings: None,
         }
     }
@@ -215,6 +222,8 @@ impl SurfaceDistance {
     /// (`pseudonormal`). Returns whether any triangle decides by its
     /// pseudonormal (the sign stays on the winding number otherwise).
     pub fn use_pseudonormal_sign(&mut self, mesh: &SurfaceMesh) -> bool {
+        self.closed_chain =
+            self.bvh.faces.len() == mesh.triangles.len() && triangles_close(&mesh.triangles);
         let pseudonormals = match (&self.crossings, &self.expansions) {
             (Some(crossings), Some(expansions)) => {
                 let winding = |p: [f64; 3]| winding::fast(&self.bvh, expansions, p);
@@ -365,6 +374,37 @@ impl SurfaceDistance {
             .collect()
     }
 
+    /// [`signed_distances_within`](Self::signed_distances_within) where `signs[i]`,
+    /// when not 0, is the sign the caller vouches for at `points[i]` (no surface
+    /// between it and a point of that sign nearer than its distance): taken instead of
+    /// the pseudonormal's or the winding number's, which far from a surface that
+    /// crosses itself is most of a signed distance's cost. Only on triangles that form
+    /// a closed chain (found by [`use_pseudonormal_sign`](Self::use_pseudonormal_sign)):
+    /// across the hole of an open surface the winding number passes ½ away from the
+    /// surface, so there the signs are ignored. In parallel.
+    pub fn signed_distances_within_known(
+        &self,
+        points: &[[f64; 3]],
+        band: f64,
+        signs: &[i8],
+    ) -> Vec<f64> {
+        points
+            .par_iter()
+            .enumerate()
+            .map(|(i, &p)| match signs.get(i) {
+                Some(&s) if s != 0 && self.closed_chain => {
+                    let d = self.distance_within(p, band);
+                    if d > 0.0 && d.is_finite() {
+                        d * f64::from(s.signum())
+                    } else {
+                        d
+                    }
+                }
+                _ => self.signed_distance_within(p, band),
+            })
+            .collect()
+    }
+
     /// [`distance`](Self::distance) of every point, in parallel.
     pub fn distances(&self, points: &[[f64; 3]]) -> Vec<f64> {
         points.par_iter().map(|&p| self.distance(p)).collect()
@@ -398,6 +438,21 @@ impl SurfaceDistance {
             .ray(origin, dir, t_min, t_max)
             .map(|(t, i)| (t, self.bvh.faces[i]))
     }
+}
+
+/// Whether every edge of `triangles` is used as often in one direction as in the other
+/// (degenerate sides, from a vertex to itself, are no edges).
+fn triangles_close(triangles: &[[u32; 3]]) -> bool {
+    let mut balance: rustc_hash::FxHashMap<[u32; 2], i32> = Default::default();
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a != b {
+                *balance.entry([a.min(b), a.max(b)]).or_default() += if a < b { 1 } else { -1 };
+            }
+        }
+    }
+    balance.values().all(|&b| b == 0)
 }
 
 impl SurfaceDistance {
@@ -671,6 +726,35 @@ mod tests {
         let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let b = [[0.2, 0.2, -0.5], [0.2, 0.2, 0.5], [0.9, 0.9, 0.0]];
         assert!(crossing_segment(a, b).is_some());
+    }
+
+    /// A sign the caller vouches for is taken where the triangles close (even a wrong
+    /// one: the caller answers for it; the magnitude stays the distance), and ignored
+    /// where they do not (across a hole the winding number passes ½ off the surface).
+    #[test]
+    fn vouched_signs_are_taken_only_where_the_triangles_close() {
+        let points = [[0.1, 0.1, 0.1], [5.0, 5.0, 5.0], [0.2, 0.2, -0.5]];
+        let closed = tetra();
+        let mut distance = SurfaceDistance::new(&closed);
+        distance.use_pseudonormal_sign(&closed);
+        for band in [0.01, 10.0] {
+            let plain = distance.signed_distances_within_known(&points, band, &[0; 3]);
+            assert!(
+                plain[0] < 0.0 && plain[1] > 0.0 && plain[2] > 0.0,
+                "{plain:?}"
+            );
+            let vouched = distance.signed_distances_within_known(&points, band, &[1, -1, 0]);
+            assert_eq!(vouched, [-plain[0], -plain[1], plain[2]], "band {band}");
+        }
+        let mut open = tetra();
+        open.triangles.pop();
+        let mut distance = SurfaceDistance::new(&open);
+        distance.use_pseudonormal_sign(&open);
+        for band in [0.01, 10.0] {
+            let plain = distance.signed_distances_within_known(&points, band, &[0; 3]);
+            let vouched = distance.signed_distances_within_known(&points, band, &[1, -1, 1]);
+            assert_eq!(vouched, plain, "band {band}");
+        }
     }
 
     /// Two tetrahedra, the second moved half into the first: the crossings that involve

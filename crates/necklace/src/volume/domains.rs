@@ -32,6 +32,17 @@ pub trait Domain: Sync {
         self.values(points)
     }
 
+    /// [`Domain::values_within`] where the caller knows some signs: `signs[i]`, when
+    /// not 0, is the sign of the value at `points[i]` (the caller saw a value of that
+    /// sign at a point nearer to it than that value's magnitude, so no boundary lies
+    /// between). An implementation may take the sign from it instead of finding it
+    /// (far from a surface that crosses itself, a signed distance costs a winding
+    /// number); the default ignores it.
+    fn values_within_signed(&self, points: &[[f64; 3]], band: f64, signs: &[i8]) -> Vec<f64> {
+        let _ = signs;
+        self.values_within(points, band)
+    }
+
     /// Where the segment `a`–`b` (whose ends have opposite signs) crosses the boundary,
     /// as a parameter in (0, 1), if the domain can say directly (e.g. by a ray cast);
     /// `None` lets the mesher search for the root of [`Domain::value`].
@@ -134,6 +145,11 @@ impl Domain for SurfaceInside<'_> {
         self.distance.signed_distances_within(points, band)
     }
 
+    fn values_within_signed(&self, points: &[[f64; 3]], band: f64, signs: &[i8]) -> Vec<f64> {
+        self.distance
+            .signed_distances_within_known(points, band, signs)
+    }
+
     fn distance_within(&self, p: [f64; 3], limit: f64) -> f64 {
         self.distance.distance_within(p, limit)
     }
@@ -233,6 +249,23 @@ impl<D: Domain> Domain for Shell<D> {
 
     fn values_within(&self, points: &[[f64; 3]], band: f64) -> Vec<f64> {
         let solid = self.solid.values_within(points, band);
+        points
+            .iter()
+            .zip(solid)
+            .map(|(&p, s)| self.combine(p, s))
+            .collect()
+    }
+
+    fn values_within_signed(&self, points: &[[f64; 3]], band: f64, signs: &[i8]) -> Vec<f64> {
+        // Inside the sphere the shell's value and the solid's have opposite signs (in
+        // the shell: outside the solid; else inside it); outside it the solid's sign is
+        // not told.
+        let solid_signs: Vec<i8> = points
+            .iter()
+            .zip(signs)
+            .map(|(&p, &s)| if self.sphere_value(p) < 0.0 { -s } else { 0 })
+            .collect();
+        let solid = self.solid.values_within_signed(points, band, &solid_signs);
         points
             .iter()
             .zip(solid)

@@ -36,7 +36,10 @@
 //!    [`StuffingStats::spacing_floor`]), a tree or a mesh still over it raises the floor
 //!    and starts again, and a run over it without thin parts to coarsen is refused with the
 //!    figure ([`ErrorKind::OverBudget`]), before the lattice is allocated. The pipeline
-//!    gives each of two sides meshed at once half of [`VolumeOptions::max_memory`].
+//!    gives each of two sides meshed at once half of [`VolumeOptions::max_memory`]. A
+//!    cell whose parent's value is larger than the distance between their centres has
+//!    the parent's sign, and the domain is told so ([`Domain::values_within_signed`]):
+//!    far from a surface that crosses itself, the sign is most of a value's cost.
 //! 2. `background`: the octree's BCC tetrahedralisation (graded, conforming).
 //! 3. `stuffing`: domain values at the lattice vertices, cut points on sign-changing
 //!    edges (the domain's ray hits, else regula falsi), warping of vertices too close to
@@ -680,7 +683,19 @@ fn build_octree(
         // All cells of one level have the same size.
         let size = grid.length(cells.first().map_or(0, |c| c.size));
         let half_diagonal = 0.5 * 3f64.sqrt() * size;
-        let values = domain.values_within(&centres, half_diagonal + coarsest);
+        // A cell's centre is half its diagonal from its parent's: where the parent's
+        // value is larger (f is 1-Lipschitz; a value beyond the band is a bound), no
+        // boundary lies between them and the sign is the parent's.
+        let signs: Vec<i8> = cells
+            .iter()
+            .map(|cell| {
+                octree::parent(grid.root, *cell)
+                    .and_then(|parent| centre_values.get(&parent.center()))
+                    .filter(|f| f.abs() > half_diagonal * (1.0 + 1e-9))
+                    .map_or(0, |f| if *f < 0.0 { -1 } else { 1 })
+            })
+            .collect();
+        let values = domain.values_within_signed(&centres, half_diagonal + coarsest, &signs);
         let thin = lists.level(cells, &to_point, grid.unit);
         let decisions: Vec<bool> = cells
             .iter()

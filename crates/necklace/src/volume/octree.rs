@@ -126,6 +126,11 @@ fn contains(root: Cell, p: Key) -> bool {
     (0..3).all(|k| p[k] >= root.origin[k] && p[k] < root.origin[k] + root.size)
 }
 
+/// The cell that `cell` is one of the eight children of (`None` for the root).
+pub(crate) fn parent(root: Cell, cell: Cell) -> Option<Cell> {
+    (cell.size < root.size).then(|| cell_at(root, cell.origin, 2 * cell.size))
+}
+
 /// The cell of side `size` (a power of two dividing the root's) that contains `p`.
 fn cell_at(root: Cell, p: Key, size: i64) -> Cell {
     let origin = [0, 1, 2].map(|k| {
@@ -224,5 +229,22 @@ mod tests {
         }
         assert_eq!(tree.leaf_containing([0, 0, 0]).unwrap().size, 2);
         assert_eq!(tree.leaf_containing([63, 63, 63]).unwrap().size, 32);
+    }
+
+    #[test]
+    fn every_child_has_its_cell_for_parent() {
+        let root = Cell {
+            origin: [-8, 4, 0],
+            size: 32,
+        };
+        assert_eq!(parent(root, root), None);
+        let mut level = vec![root];
+        while level[0].size > 2 {
+            let next: Vec<Cell> = level.iter().flat_map(Cell::children).collect();
+            for (i, child) in next.iter().enumerate() {
+                assert_eq!(parent(root, *child), Some(level[i / 8]));
+            }
+            level = next;
+        }
     }
 }

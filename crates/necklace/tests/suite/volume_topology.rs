@@ -314,3 +314,77 @@ fn a_side_that_fails_stops_the_other_and_its_error_is_the_runs() {
         "the outside went on after the inside failed: {stages:?}"
     );
 }
+
+/// The surface's solid with the signs callers vouch for ignored: the default
+/// [`Domain::values_within_signed`], everything else the wrapped domain's.
+struct IgnoringSigns<'a>(necklace::volume::SurfaceInside<'a>);
+
+impl necklace::volume::Domain for IgnoringSigns<'_> {
+    fn value(&self, p: [f64; 3]) -> f64 {
+        self.0.value(p)
+    }
+    fn values(&self, points: &[[f64; 3]]) -> Vec<f64> {
+        self.0.values(points)
+    }
+    fn values_within(&self, points: &[[f64; 3]], band: f64) -> Vec<f64> {
+        self.0.values_within(points, band)
+    }
+    fn crossing(&self, a: [f64; 3], b: [f64; 3]) -> Option<f64> {
+        self.0.crossing(a, b)
+    }
+    fn project(&self, p: [f64; 3]) -> [f64; 3] {
+        self.0.project(p)
+    }
+    fn boundary_kind(&self, p: [f64; 3]) -> necklace::VertexKind {
+        self.0.boundary_kind(p)
+    }
+    fn distance_within(&self, p: [f64; 3], limit: f64) -> f64 {
+        self.0.distance_within(p, limit)
+    }
+    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        self.0.bounds()
+    }
+}
+
+/// The octree takes a cell's sign from its parent where the parent's value says no
+/// boundary lies between them, instead of asking the winding number (the cost of a
+/// signed distance far from a surface that crosses itself). On two spheres that
+/// cross, inside and in the shell round them, the meshes are the ones the winding
+/// number gives.
+#[test]
+fn signs_taken_from_the_parent_cell_give_the_mesh_the_winding_number_gives() {
+    use necklace::distance::SurfaceDistance;
+    use necklace::volume::{Domain, SharpFeatures, Shell, SurfaceInside};
+    let mesh = union(&[
+        sphere(1.0, [0.0; 3], 12.0),
+        sphere(0.8, [1.2, 0.3, 0.1], 12.0),
+    ]);
+    let distance = SurfaceDistance::of_surface(&mesh);
+    assert!(
+        !distance.crossings().unwrap().is_empty(),
+        "the spheres cross"
+    );
+    let inside = || SurfaceInside {
+        distance: &distance,
+        bounds: ([-1.0, -1.0, -1.0], [2.0, 1.1, 0.9]),
+        sizing: Vec::new(),
+        features: SharpFeatures::default(),
+    };
+    let options = StuffingOptions::new(0.1);
+    let same = |a: &dyn Domain, b: &dyn Domain, what: &str| {
+        let (a, b) = (
+            stuff_volume(a, &options).unwrap(),
+            stuff_volume(b, &options).unwrap(),
+        );
+        assert!(a.mesh.num_tets() > 1000, "{what}: {}", a.mesh.num_tets());
+        assert_eq!(a.mesh.tets, b.mesh.tets, "{what}");
+        assert_eq!(a.mesh.positions, b.mesh.positions, "{what}");
+    };
+    same(&inside(), &IgnoringSigns(inside()), "inside");
+    let centre = [0.5, 0.05, -0.05];
+    same(
+        &Shell::new(inside(), centre, 3.0),
+        &Shell::new(IgnoringSigns(inside()), centre, 3.0),
+        "shell",
+    );
+}
