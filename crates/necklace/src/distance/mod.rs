@@ -443,16 +443,17 @@ impl SurfaceDistance {
 /// Whether every edge of `triangles` is used as often in one direction as in the other
 /// (degenerate sides, from a vertex to itself, are no edges).
 fn triangles_close(triangles: &[[u32; 3]]) -> bool {
-    let mut balance: rustc_hash::FxHashMap<[u32; 2], i32> = Default::default();
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if a != b {
-                *balance.entry([a.min(b), a.max(b)]).or_default() += if a < b { 1 } else { -1 };
-            }
-        }
-    }
-    balance.values().all(|&b| b == 0)
+    // Each side as (edge, ±1), sorted by edge: the edge's uses sum to 0 in each run.
+    let mut sides: Vec<([u32; 2], i32)> = triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .filter(|(a, b)| a != b)
+        .map(|(a, b)| ([a.min(b), a.max(b)], if a < b { 1 } else { -1 }))
+        .collect();
+    sides.sort_unstable();
+    sides
+        .chunk_by(|x, y| x.0 == y.0)
+        .all(|run| run.iter().map(|s| s.1).sum::<i32>() == 0)
 }
 
 impl SurfaceDistance {
