@@ -17,8 +17,11 @@
 //! each side of a triangle that nothing crosses or touches: it is read once per triangle,
 //! just off its front and its back at four points, and the triangle decides locally only
 //! when the four agree. Triangles of a crossing, the ring round them, those at a
-//! non-manifold or degenerate corner, and those whose samples disagree (a coplanar part
-//! touching them) leave the sign to the winding number at `p`.
+//! non-manifold or degenerate corner, those of two parts that touch (a corner or an edge
+//! of one on the other, within [`TOUCH_TOLERANCE`] of the diagonal: no crossing, yet
+//! the winding number next to the contact is not the one off the triangle's middle, as
+//! for a part buried in another but for one corner on its surface), and those whose
+//! samples disagree leave the sign to the winding number at `p`.
 //!
 //! **Triangles that do not close** (holes, seams whose edges are used more often in one
 //! direction than the other) make the winding number vary off the surface, but only
@@ -141,6 +144,11 @@ impl Pseudonormals {
             {
                 bad[v as usize] = true;
             }
+        }
+        // Parts that touch without crossing: the winding number next to the contact
+        // is not the one off the triangle's middle.
+        for v in touching_vertices(mesh, bvh, TOUCH_TOLERANCE * bvh.diagonal()) {
+            bad[v as usize] = true;
         }
         let open = !unbalanced.is_empty();
         let (mut pseudonormals, margin) = Self::build(
@@ -278,6 +286,111 @@ impl Pseudonormals {
         }
         Some(side as f64)
     }
+}
+
+/// Two triangles that share no vertex touch when a corner of one or a point of their
+/// edges comes within this fraction of the bounding-box diagonal of the other.
+const TOUCH_TOLERANCE: f64 = 1e-7;
+
+/// The vertices of the pairs of triangles that share no vertex and touch: a corner of
+/// one on the other, or an edge of one meeting an edge of the other, within
+/// `tolerance`. A crossing meets along a segment and is found as one; a touch meets
+/// at a point or along a shared plane, which the crossing test does not report, yet
+/// the winding number changes there: a triangle buried in another part has the same
+/// winding number on both sides off its middle, but not at a corner where that part's
+/// surface touches it. Sorted, without repeats.
+fn touching_vertices(mesh: &SurfaceMesh, bvh: &Bvh, tolerance: f64) -> Vec<u32> {
+    let mut vertices: Vec<u32> = (0..bvh.tris.len())
+        .into_par_iter()
+        .map_init(Vec::new, |candidates, i| {
+            let tri = &bvh.tris[i];
+            let (mut lo, mut hi) = crate::geom::bounds(tri.iter().copied());
+            for k in 0..3 {
+                lo[k] -= tolerance;
+                hi[k] += tolerance;
+            }
+            candidates.clear();
+            bvh.overlapping(lo, hi, candidates);
+            let fi = bvh.faces[i];
+            let vi = mesh.triangles[fi as usize];
+            let mut out = Vec::new();
+            for &j in candidates.iter() {
+                let fj = bvh.faces[j];
+                let vj = mesh.triangles[fj as usize];
+                if fj > fi
+                    && !vj.iter().any(|v| vi.contains(v))
+                    && triangles_touch(tri, &bvh.tris[j], tolerance)
+                {
+                    out.extend(vi);
+                    out.extend(vj);
+                }
+            }
+            out
+        })
+        .flatten()
+        .collect();
+    vertices.sort_unstable();
+    vertices.dedup();
+    vertices
+}
+
+/// Whether a corner of either triangle lies within `tolerance` of the other, or an edge
+/// of one within `tolerance` of an edge of the other.
+fn triangles_touch(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3], tolerance: f64) -> bool {
+    let near = |p: [f64; 3], q: [f64; 3]| norm(sub(p, q)) <= tolerance;
+    let corner_on = |t: &[[f64; 3]; 3], p: [f64; 3]| {
+        near(p, crate::geom::closest_on_triangle(p, t[0], t[1], t[2]))
+    };
+    a.iter().any(|&p| corner_on(b, p))
+        || b.iter().any(|&p| corner_on(a, p))
+        || (0..3).any(|i| {
+            (0..3).any(|j| {
+                let (p, q) = segments_closest(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]);
+                near(p, q)
+            })
+        })
+}
+
+/// The closest points of the segments `p0p1` and `q0q1` (Ericson, *Real-Time Collision
+/// Detection*, 5.1.9; a zero-length segment is its point).
+fn segments_closest(
+    p0: [f64; 3],
+    p1: [f64; 3],
+    q0: [f64; 3],
+    q1: [f64; 3],
+) -> ([f64; 3], [f64; 3]) {
+    let (d1, d2, r) = (sub(p1, p0), sub(q1, q0), sub(p0, q0));
+    let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
+    let point = |o: [f64; 3], d: [f64; 3], t: f64| add(o, scale(d, t));
+    if a <= 0.0 && e <= 0.0 {
+        return (p0, q0);
+    }
+    let (s, t) = if a <= 0.0 {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = dot(d1, r);
+        if e <= 0.0 {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = dot(d1, d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > 0.0 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    (point(p0, d1, s), point(q0, d2, t))
 }
 
 /// The edges used more often in one direction than in the other, with their ends and
@@ -427,4 +540,111 @@ fn sample_points(tri: &[[f64; 3]; 3], n: [f64; 3]) -> Option<[[[f64; 3]; 4]; 2]>
         at([0.2, 0.2, 0.6]),
     ];
     Some([1.0, -1.0].map(|direction| points.map(|x| add(x, scale(n, direction * offset)))))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::distance::{winding, SurfaceDistance};
+
+    /// A cube [0, 2]³ with a tetrahedron inside whose one corner is the cube's corner
+    /// (2, 2, 2), and two tetrahedra that cross each other away from them (so that the
+    /// triangles decide locally). The buried tetrahedron's faces have the solid on both
+    /// sides off their middle, but the points of the cube's outer octant, whose closest
+    /// point is that corner (a tie between the two parts), are outside: a face at the
+    /// contact must not call them inside.
+    #[test]
+    fn a_face_that_touches_another_part_at_a_corner_does_not_decide_there() {
+        let mut positions: Vec<[f64; 3]> = (0..8)
+            .map(|i: u32| [i & 1, (i >> 1) & 1, (i >> 2) & 1].map(|b| 2.0 * f64::from(b)))
+            .collect();
+        let mut triangles = vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        // Tetrahedra, outward: the buried one at the corner, then two that cross.
+        let tetrahedra = [
+            [
+                [2.0, 2.0, 2.0],
+                [1.0, 1.6, 1.6],
+                [1.6, 1.0, 1.6],
+                [1.6, 1.6, 1.0],
+            ],
+            [
+                [6.0, 0.0, 0.0],
+                [8.0, 0.0, 0.0],
+                [6.0, 2.0, 0.0],
+                [6.0, 0.0, 2.0],
+            ],
+            [
+                [6.5, 0.3, 0.3],
+                [8.5, 0.3, 0.3],
+                [6.5, 2.3, 0.3],
+                [6.5, 0.3, 2.3],
+            ],
+        ];
+        for corners in tetrahedra {
+            let o = positions.len() as u32;
+            positions.extend(corners);
+            let [a, b, c, d] = corners;
+            let outward = dot(sub(d, a), cross(sub(b, a), sub(c, a))) < 0.0;
+            for t in [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]] {
+                let t = if outward { t } else { [t[0], t[2], t[1]] };
+                triangles.push(t.map(|v| o + v));
+            }
+        }
+        let mesh = SurfaceMesh {
+            positions,
+            triangles,
+        };
+        let crossings = SurfaceDistance::new(&mesh).self_intersections(&mesh.triangles);
+        assert!(!crossings.is_empty());
+        let tris: Vec<[[f64; 3]; 3]> = mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| mesh.positions[v as usize]))
+            .collect();
+        let bvh = Bvh::build(tris, (0..mesh.triangles.len() as u32).collect());
+        let winding = |p: [f64; 3]| winding::exact(&bvh, p);
+        let local = Local {
+            crossings: &crossings,
+            winding: &winding,
+        };
+        let pseudonormals = Pseudonormals::new(&mesh, &bvh, Some(local)).expect("some decide");
+        let corner = [2.0, 2.0, 2.0];
+        let mut decided = 0;
+        for (t, tri) in bvh.tris.iter().enumerate() {
+            if !tri.contains(&corner) {
+                continue;
+            }
+            for p in [[2.5, 2.5, 2.5], [2.1, 2.9, 2.3], [3.0, 2.01, 2.01]] {
+                assert_eq!(winding(p).round(), 0.0);
+                let sign = pseudonormals.sign(t, tri, corner, p);
+                assert_ne!(sign, Some(-1.0), "face {} calls {p:?} inside", bvh.faces[t]);
+                decided += usize::from(sign.is_some());
+            }
+        }
+        // The cube's faces at the corner touch the tetrahedron there too, and leave
+        // the sign to the winding number like the buried faces.
+        assert_eq!(decided, 0);
+        // Away from the contact the cube's faces decide: below the bottom face.
+        let bottom = bvh
+            .tris
+            .iter()
+            .position(|t| t.iter().all(|p| p[2] == 0.0) && t.contains(&[0.0, 0.0, 0.0]))
+            .expect("a bottom face at the origin");
+        let q = [0.5, 0.5, 0.0];
+        let sign = pseudonormals.sign(bottom, &bvh.tris[bottom], q, [0.5, 0.5, -1.0]);
+        assert_eq!(sign, Some(1.0));
+    }
 }
