@@ -15,8 +15,9 @@
 //! `q`'s triangle it lies on, next to `q`. Where the triangles form a closed chain (every
 //! edge used as often in each direction), the winding number is an integer, constant on
 //! each side of a triangle that nothing crosses or touches: it is read once per triangle,
-//! just off its front and its back at four points, and the triangle decides locally only
-//! when the four agree. Triangles of a crossing, the ring round them, those at a
+//! just off its front and its back at four points whose nearest surface is the triangle
+//! (closer in where another part lies a hair away), and the triangle decides locally
+//! only when the four agree. Triangles of a crossing, the ring round them, those at a
 //! non-manifold or degenerate corner, those of two parts that touch (a corner or an edge
 //! of one on the other, within [`TOUCH_TOLERANCE`] of the diagonal: no crossing, yet
 //! the winding number next to the contact is not the one off the triangle's middle, as
@@ -216,9 +217,9 @@ impl Pseudonormals {
                     None => ([1, -1], [0.0; 2]),
                     Some((bad, _, _)) if t.iter().any(|&v| bad[v as usize]) => ([0, 0], [0.0; 2]),
                     Some((_, local, false)) => {
-                        (sampled_sides(tri, out[0], local.winding), [0.0; 2])
+                        (sampled_sides(tri, out[0], bvh, local.winding), [0.0; 2])
                     }
-                    Some((_, local, true)) => sampled_halves(tri, out[0], local.winding),
+                    Some((_, local, true)) => sampled_halves(tri, out[0], bvh, local.winding),
                 };
                 (out, sides)
             })
@@ -464,15 +465,16 @@ fn open_chain(
 
 /// The signs just in front of triangle `tri` (unit normal `n`) and just behind it, from
 /// the winding number at four points of it (the centroid and a point towards each
-/// corner) offset by a hundredth of its inradius; `[0, 0]` unless the four agree on
-/// each side, each within [`INTEGER_TOLERANCE`] of an integer, or for a triangle too
-/// thin for an offset above the coordinates' rounding.
+/// corner) offset by a hundredth of its inradius or less ([`sample_points`]); `[0, 0]`
+/// unless the four agree on each side, each within [`INTEGER_TOLERANCE`] of an
+/// integer, or for a triangle too thin for an offset above the coordinates' rounding.
 fn sampled_sides(
     tri: &[[f64; 3]; 3],
     n: [f64; 3],
+    bvh: &Bvh,
     winding: &(dyn Fn([f64; 3]) -> f64 + Sync),
 ) -> [i8; 2] {
-    let Some(points) = sample_points(tri, n) else {
+    let Some(points) = sample_points(tri, n, bvh) else {
         return [0, 0];
     };
     points.map(|points| {
@@ -502,9 +504,10 @@ fn sampled_sides(
 fn sampled_halves(
     tri: &[[f64; 3]; 3],
     n: [f64; 3],
+    bvh: &Bvh,
     winding: &(dyn Fn([f64; 3]) -> f64 + Sync),
 ) -> ([i8; 2], [f64; 2]) {
-    let Some(points) = sample_points(tri, n) else {
+    let Some(points) = sample_points(tri, n, bvh) else {
         return ([0, 0], [0.0; 2]);
     };
     let halves = points.map(|points| {
@@ -518,28 +521,47 @@ fn sampled_halves(
     ([halves[0].0, halves[1].0], [halves[0].1, halves[1].1])
 }
 
-/// The four sample points of [`sampled_sides`] in front of `tri` and behind it; `None`
-/// for a triangle without a normal or too thin for an offset above the rounding.
-fn sample_points(tri: &[[f64; 3]; 3], n: [f64; 3]) -> Option<[[[f64; 3]; 4]; 2]> {
+/// The four sample points of [`sampled_sides`] in front of `tri` and behind it, each
+/// with `tri` for its nearest surface (no other triangle nearer than the offset: a part
+/// lying a hair off the triangle, closer than [`SAMPLE_OFFSET`] × its inradius, would
+/// lend the samples its winding number); the offset is cut by 16, twice, until they
+/// are. `None` for a triangle without a normal, too thin for an offset above the
+/// rounding, or with something nearer than the smallest offset.
+fn sample_points(tri: &[[f64; 3]; 3], n: [f64; 3], bvh: &Bvh) -> Option<[[[f64; 3]; 4]; 2]> {
     let [a, b, c] = *tri;
     let area2 = norm(cross(sub(b, a), sub(c, a)));
     let perimeter = norm(sub(b, a)) + norm(sub(c, b)) + norm(sub(a, c));
     let inradius = area2 / perimeter;
     let magnitude = tri.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    let offset = SAMPLE_OFFSET * inradius;
-    let too_thin = offset.is_nan() || offset <= 1e-9 * magnitude;
-    if n == [0.0; 3] || too_thin {
+    if n == [0.0; 3] {
         return None;
     }
     let at = |w: [f64; 3]| add(add(scale(a, w[0]), scale(b, w[1])), scale(c, w[2]));
     let third = 1.0 / 3.0;
-    let points = [
+    let feet = [
         at([third; 3]),
         at([0.6, 0.2, 0.2]),
         at([0.2, 0.6, 0.2]),
         at([0.2, 0.2, 0.6]),
     ];
-    Some([1.0, -1.0].map(|direction| points.map(|x| add(x, scale(n, direction * offset)))))
+    for cut in [1.0, 1.0 / 16.0, 1.0 / 256.0] {
+        let offset = cut * SAMPLE_OFFSET * inradius;
+        if offset.is_nan() || offset <= 1e-9 * magnitude {
+            return None;
+        }
+        let points =
+            [1.0, -1.0].map(|direction| feet.map(|x| add(x, scale(n, direction * offset))));
+        // Nothing but `tri` within the offset (less a margin for rounding).
+        let limit = (offset * (1.0 - 1e-6)).powi(2);
+        if points
+            .iter()
+            .flatten()
+            .all(|&x| bvh.nearest_within(x, limit).is_none())
+        {
+            return Some(points);
+        }
+    }
+    None
 }
 
 #[cfg(test)]
@@ -547,18 +569,13 @@ mod tests {
     use super::*;
     use crate::distance::{winding, SurfaceDistance};
 
-    /// A cube [0, 2]³ with a tetrahedron inside whose one corner is the cube's corner
-    /// (2, 2, 2), and two tetrahedra that cross each other away from them (so that the
-    /// triangles decide locally). The buried tetrahedron's faces have the solid on both
-    /// sides off their middle, but the points of the cube's outer octant, whose closest
-    /// point is that corner (a tie between the two parts), are outside: a face at the
-    /// contact must not call them inside.
-    #[test]
-    fn a_face_that_touches_another_part_at_a_corner_does_not_decide_there() {
-        let mut positions: Vec<[f64; 3]> = (0..8)
-            .map(|i: u32| [i & 1, (i >> 1) & 1, (i >> 2) & 1].map(|b| 2.0 * f64::from(b)))
-            .collect();
-        let mut triangles = vec![
+    /// Append the cube `[origin, origin + size]` (faces outward) to `mesh`.
+    fn add_cube(mesh: &mut SurfaceMesh, origin: [f64; 3], size: [f64; 3]) {
+        let o = mesh.positions.len() as u32;
+        mesh.positions.extend(
+            (0..8).map(|i: u32| [0, 1, 2].map(|k| origin[k] + size[k] * f64::from((i >> k) & 1))),
+        );
+        for t in [
             [0, 2, 1],
             [1, 2, 3],
             [4, 5, 6],
@@ -571,42 +588,44 @@ mod tests {
             [2, 4, 6],
             [1, 3, 5],
             [3, 7, 5],
-        ];
-        // Tetrahedra, outward: the buried one at the corner, then two that cross.
-        let tetrahedra = [
-            [
-                [2.0, 2.0, 2.0],
-                [1.0, 1.6, 1.6],
-                [1.6, 1.0, 1.6],
-                [1.6, 1.6, 1.0],
-            ],
-            [
-                [6.0, 0.0, 0.0],
-                [8.0, 0.0, 0.0],
-                [6.0, 2.0, 0.0],
-                [6.0, 0.0, 2.0],
-            ],
-            [
-                [6.5, 0.3, 0.3],
-                [8.5, 0.3, 0.3],
-                [6.5, 2.3, 0.3],
-                [6.5, 0.3, 2.3],
-            ],
-        ];
-        for corners in tetrahedra {
-            let o = positions.len() as u32;
-            positions.extend(corners);
-            let [a, b, c, d] = corners;
-            let outward = dot(sub(d, a), cross(sub(b, a), sub(c, a))) < 0.0;
-            for t in [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]] {
-                let t = if outward { t } else { [t[0], t[2], t[1]] };
-                triangles.push(t.map(|v| o + v));
-            }
+        ] {
+            mesh.triangles.push(t.map(|v| o + v));
         }
-        let mesh = SurfaceMesh {
-            positions,
-            triangles,
-        };
+    }
+
+    /// Append the tetrahedron of `corners` (faces outward) to `mesh`.
+    fn add_tetrahedron(mesh: &mut SurfaceMesh, corners: [[f64; 3]; 4]) {
+        let o = mesh.positions.len() as u32;
+        mesh.positions.extend(corners);
+        let [a, b, c, d] = corners;
+        let outward = dot(sub(d, a), cross(sub(b, a), sub(c, a))) < 0.0;
+        for t in [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]] {
+            let t = if outward { t } else { [t[0], t[2], t[1]] };
+            mesh.triangles.push(t.map(|v| o + v));
+        }
+    }
+
+    /// `mesh` with two tetrahedra that cross each other far from it (so that its
+    /// triangles decide their sign locally), its tree and its local pseudonormals.
+    fn deciding_locally(mut mesh: SurfaceMesh) -> (SurfaceMesh, Bvh, Pseudonormals) {
+        add_tetrahedron(
+            &mut mesh,
+            [
+                [16.0, 0.0, 0.0],
+                [18.0, 0.0, 0.0],
+                [16.0, 2.0, 0.0],
+                [16.0, 0.0, 2.0],
+            ],
+        );
+        add_tetrahedron(
+            &mut mesh,
+            [
+                [16.5, 0.3, 0.3],
+                [18.5, 0.3, 0.3],
+                [16.5, 2.3, 0.3],
+                [16.5, 0.3, 2.3],
+            ],
+        );
         let crossings = SurfaceDistance::new(&mesh).self_intersections(&mesh.triangles);
         assert!(!crossings.is_empty());
         let tris: Vec<[[f64; 3]; 3]> = mesh
@@ -621,6 +640,32 @@ mod tests {
             winding: &winding,
         };
         let pseudonormals = Pseudonormals::new(&mesh, &bvh, Some(local)).expect("some decide");
+        (mesh, bvh, pseudonormals)
+    }
+
+    /// A cube [0, 2]³ with a tetrahedron inside whose one corner is the cube's corner
+    /// (2, 2, 2). The buried tetrahedron's faces have the solid on both sides off their
+    /// middle, but the points of the cube's outer octant, whose closest point is that
+    /// corner (a tie between the two parts), are outside: a face at the contact must not
+    /// call them inside.
+    #[test]
+    fn a_face_that_touches_another_part_at_a_corner_does_not_decide_there() {
+        let mut mesh = SurfaceMesh {
+            positions: Vec::new(),
+            triangles: Vec::new(),
+        };
+        add_cube(&mut mesh, [0.0; 3], [2.0; 3]);
+        add_tetrahedron(
+            &mut mesh,
+            [
+                [2.0, 2.0, 2.0],
+                [1.0, 1.6, 1.6],
+                [1.6, 1.0, 1.6],
+                [1.6, 1.6, 1.0],
+            ],
+        );
+        let (_, bvh, pseudonormals) = deciding_locally(mesh);
+        let winding = |p: [f64; 3]| winding::exact(&bvh, p);
         let corner = [2.0, 2.0, 2.0];
         let mut decided = 0;
         for (t, tri) in bvh.tris.iter().enumerate() {
@@ -646,5 +691,38 @@ mod tests {
         let q = [0.5, 0.5, 0.0];
         let sign = pseudonormals.sign(bottom, &bvh.tris[bottom], q, [0.5, 0.5, -1.0]);
         assert_eq!(sign, Some(1.0));
+    }
+
+    /// Two cubes stacked with a gap of 10⁻³ between them, less than the samples'
+    /// first offset (a hundredth of a face's inradius, 0.006 here) and far more than a
+    /// touch: the lower cube's top faces read their winding number closer in, and call
+    /// the gap outside.
+    #[test]
+    fn a_part_a_hair_away_does_not_lend_its_winding_number_to_the_samples() {
+        let gap = 1e-3;
+        let mut mesh = SurfaceMesh {
+            positions: Vec::new(),
+            triangles: Vec::new(),
+        };
+        add_cube(&mut mesh, [0.0; 3], [2.0; 3]);
+        add_cube(&mut mesh, [0.0, 0.0, 2.0 + gap], [2.0; 3]);
+        let (_, bvh, pseudonormals) = deciding_locally(mesh);
+        let mut decided = 0;
+        for (t, tri) in bvh.tris.iter().enumerate() {
+            if !tri.iter().all(|p| p[2] == 2.0) {
+                continue;
+            }
+            for (x, y) in [(0.5, 1.0), (1.0, 0.5), (1.5, 1.0), (1.0, 1.5)] {
+                let q = [x, y, 2.0];
+                let on = crate::geom::closest_on_triangle(q, tri[0], tri[1], tri[2]);
+                if norm(sub(on, q)) > 0.0 {
+                    continue;
+                }
+                let sign = pseudonormals.sign(t, tri, q, [x, y, 2.0 + 0.5 * gap]);
+                assert_eq!(sign, Some(1.0), "face {} at {q:?}", bvh.faces[t]);
+                decided += 1;
+            }
+        }
+        assert_eq!(decided, 4);
     }
 }
