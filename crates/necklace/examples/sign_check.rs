@@ -62,9 +62,12 @@ fn main() {
             wrong += 1;
             if wrong <= 3 {
                 let closest = distance.closest_point(p);
+                let q = closest.point;
+                let next = [0, 1, 2].map(|k| q[k] + 1e-6 * (p[k] - q[k]));
                 println!(
-                    "  at {p:?}: signed distance {signed}, exact winding number {winding}, closest face {}",
-                    closest.face
+                    "  at {p:?}: signed distance {signed}, exact winding number {winding}, closest point {q:?} on face {}, winding number next to it {}",
+                    closest.face,
+                    distance.winding_number_exact(next)
                 );
             }
         }
