@@ -380,27 +380,31 @@ fn split(items: &mut [Item]) -> usize {
 /// that only touch, at a shared position or along a side, do not count). Coplanar
 /// triangles never cross by this test.
 pub(super) fn triangles_cross(t: &[[f64; 3]; 3], u: &[[f64; 3]; 3]) -> bool {
-    const MARGIN: f64 = 1e-9;
     let edge_through = |a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]| {
-        (0..3).any(|i| {
-            let (p, q) = (a[i], a[(i + 1) % 3]);
-            let d = sub(q, p);
-            let (e1, e2) = (sub(b[1], b[0]), sub(b[2], b[0]));
-            let pv = cross(d, e2);
-            let det = dot(e1, pv);
-            if det == 0.0 || !det.is_finite() {
-                return false;
-            }
-            let inv = 1.0 / det;
-            let tv = sub(p, b[0]);
-            let bu = dot(tv, pv) * inv;
-            let qv = cross(tv, e1);
-            let bv = dot(d, qv) * inv;
-            let s = dot(e2, qv) * inv;
-            bu > MARGIN && bv > MARGIN && bu + bv < 1.0 - MARGIN && s > MARGIN && s < 1.0 - MARGIN
-        })
+        (0..3).any(|i| segment_through(a[i], a[(i + 1) % 3], b))
     };
     edge_through(t, u) || edge_through(u, t)
+}
+
+/// Whether the segment `pq` passes through the inside of triangle `b` (Möller–Trumbore;
+/// its ends, `b`'s edges and a segment in `b`'s plane do not count, with a margin of
+/// 1e-9 on the parameters).
+pub(super) fn segment_through(p: [f64; 3], q: [f64; 3], b: &[[f64; 3]; 3]) -> bool {
+    const MARGIN: f64 = 1e-9;
+    let d = sub(q, p);
+    let (e1, e2) = (sub(b[1], b[0]), sub(b[2], b[0]));
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if det == 0.0 || !det.is_finite() {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let tv = sub(p, b[0]);
+    let bu = dot(tv, pv) * inv;
+    let qv = cross(tv, e1);
+    let bv = dot(d, qv) * inv;
+    let s = dot(e2, qv) * inv;
+    bu > MARGIN && bv > MARGIN && bu + bv < 1.0 - MARGIN && s > MARGIN && s < 1.0 - MARGIN
 }
 
 /// Relative tolerance on the barycentric coordinates of a ray hit, so that a ray through

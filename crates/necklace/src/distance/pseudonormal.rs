@@ -18,7 +18,9 @@
 //! just off its front and its back at four points whose nearest surface is the triangle
 //! (closer in where another part lies a hair away), and the triangle decides locally
 //! only when the four agree. Triangles of a crossing, the ring round them, those at a
-//! non-manifold or degenerate corner, those of two parts that touch (a corner or an edge
+//! non-manifold or degenerate corner, those of a fold (two faces with a common corner
+//! that cross, which on an otherwise embedded surface takes it to this path too), those
+//! of two parts that touch (a corner or an edge
 //! of one on the other, within [`TOUCH_TOLERANCE`] of the diagonal: no crossing, yet
 //! the winding number next to the contact is not the one off the triangle's middle, as
 //! for a part buried in another but for one corner on its surface), and those whose
@@ -36,7 +38,7 @@
 
 use rayon::prelude::*;
 
-use super::bvh::Bvh;
+use super::bvh::{segment_through, Bvh};
 use crate::geom::{add, cross, dot, norm, scale, sub};
 use crate::mesh::{SurfaceMesh, Topology};
 
@@ -89,8 +91,9 @@ pub(super) struct Local<'a> {
 impl Pseudonormals {
     /// The pseudonormals of `mesh`. Without `local`: `None` unless every edge has
     /// exactly two faces that use it in opposite directions, every vertex's faces form
-    /// one fan, and no triangle is degenerate (the conditions of the theorem, but for
-    /// self-crossings, which the caller must rule out). With `local` on a surface that
+    /// one fan, no triangle is degenerate and no two faces with a common corner cross
+    /// (the conditions of the theorem, but for crossings of faces without a common
+    /// corner, which the caller must rule out). With `local` on a surface that
     /// meets those conditions and has no crossing, the same; otherwise the triangles
     /// away from crossings and defects decide locally (see the module doc), and `None`
     /// when none decides (on triangles that do not close, within the bound of the
@@ -129,6 +132,11 @@ impl Pseudonormals {
                     bad[v as usize] = true;
                 }
             }
+        }
+        // Folds: faces with a corner in common that cross each other, which the
+        // crossing test (of faces with none in common) does not see.
+        for v in folded_vertices(mesh, bvh) {
+            bad[v as usize] = true;
         }
         let manifold = !bad.contains(&true);
         let local = match local {
@@ -293,6 +301,28 @@ impl Pseudonormals {
 /// edges comes within this fraction of the bounding-box diagonal of the other.
 const TOUCH_TOLERANCE: f64 = 1e-7;
 
+/// The corners of the pairs of faces that have exactly one corner in common and cross
+/// each other (the edge of one opposite that corner through the other): a fold, where a
+/// face pokes through its neighbour's neighbour round a shared corner, so the surface
+/// crosses itself there though no two faces without a common corner cross. (An edge
+/// from the common corner meets the other face's plane only there, unless it lies in
+/// it: tested, it would find folds in rounding wherever a fan is nearly flat.) Sorted,
+/// without repeats.
+fn folded_vertices(mesh: &SurfaceMesh, bvh: &Bvh) -> Vec<u32> {
+    vertices_of_pairs(mesh, bvh, 0.0, |t, u, vt, vu| {
+        let common: Vec<usize> = (0..3).filter(|&k| vu.contains(&vt[k])).collect();
+        let [k] = common[..] else {
+            return false;
+        };
+        let Some(l) = (0..3).find(|&l| vu[l] == vt[k]) else {
+            return false;
+        };
+        let opposite = |tri: &[[f64; 3]; 3], c: usize| (tri[(c + 1) % 3], tri[(c + 2) % 3]);
+        let ((a, b), (c, d)) = (opposite(t, k), opposite(u, l));
+        segment_through(a, b, u) || segment_through(c, d, t)
+    })
+}
+
 /// The vertices of the pairs of triangles that share no vertex and touch: a corner of
 /// one on the other, or an edge of one meeting an edge of the other, within
 /// `tolerance`. A crossing meets along a segment and is found as one; a touch meets
@@ -301,27 +331,33 @@ const TOUCH_TOLERANCE: f64 = 1e-7;
 /// winding number on both sides off its middle, but not at a corner where that part's
 /// surface touches it. Sorted, without repeats.
 fn touching_vertices(mesh: &SurfaceMesh, bvh: &Bvh, tolerance: f64) -> Vec<u32> {
+    vertices_of_pairs(mesh, bvh, tolerance, |t, u, vt, vu| {
+        !vt.iter().any(|v| vu.contains(v)) && triangles_touch(t, u, tolerance)
+    })
+}
+
+/// The corners of the pairs of faces whose boxes, grown by `grow`, meet and for which
+/// `pair(corners, corners, vertices, vertices)` holds. Sorted, without repeats.
+fn vertices_of_pairs(
+    mesh: &SurfaceMesh,
+    bvh: &Bvh,
+    grow: f64,
+    pair: impl Fn(&[[f64; 3]; 3], &[[f64; 3]; 3], [u32; 3], [u32; 3]) -> bool + Sync,
+) -> Vec<u32> {
     let mut vertices: Vec<u32> = (0..bvh.tris.len())
         .into_par_iter()
         .map_init(Vec::new, |candidates, i| {
             let tri = &bvh.tris[i];
-            let (mut lo, mut hi) = crate::geom::bounds(tri.iter().copied());
-            for k in 0..3 {
-                lo[k] -= tolerance;
-                hi[k] += tolerance;
-            }
+            let (lo, hi) = crate::geom::bounds(tri.iter().copied());
             candidates.clear();
-            bvh.overlapping(lo, hi, candidates);
+            bvh.overlapping(lo.map(|x| x - grow), hi.map(|x| x + grow), candidates);
             let fi = bvh.faces[i];
             let vi = mesh.triangles[fi as usize];
             let mut out = Vec::new();
             for &j in candidates.iter() {
                 let fj = bvh.faces[j];
                 let vj = mesh.triangles[fj as usize];
-                if fj > fi
-                    && !vj.iter().any(|v| vi.contains(v))
-                    && triangles_touch(tri, &bvh.tris[j], tolerance)
-                {
+                if fj > fi && pair(tri, &bvh.tris[j], vi, vj) {
                     out.extend(vi);
                     out.extend(vj);
                 }

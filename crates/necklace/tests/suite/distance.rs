@@ -538,3 +538,36 @@ fn the_pseudonormal_sign_holds_on_overlapping_parts_away_from_their_crossings() 
     }
     assert!(checked > 5000, "{checked}");
 }
+
+#[test]
+fn a_fold_round_a_shared_corner_leaves_the_sign_there_to_the_winding_number() {
+    // os_cow-low-resolution.obj is closed, manifold and outward, and no two of its faces
+    // without a common corner cross; but at a hoof, faces with one corner in common do
+    // (OBJ faces 2 and 4, round vertex 1: a fold). The pseudonormals there called points
+    // below the hoof inside. The solid is where the exact winding number is at least ½.
+    let path = crate::common::realworld_dir().join("os_cow-low-resolution.obj");
+    if !path.is_file() {
+        println!("SKIPPED: no {}", path.display());
+        return;
+    }
+    let prepared = necklace::pipeline::load_surface(&path).expect("the cow reads");
+    let distance = &prepared.distance;
+    let fold = [2.33969, 0.032583, 0.756243];
+    let mut random = uniform(3);
+    let mut checked = 0;
+    for _ in 0..3000 {
+        let p = [0, 1, 2].map(|k| fold[k] + 0.8 * (random() - 0.5));
+        let exact = distance.winding_number_exact(p);
+        let signed = distance.signed_distance(p);
+        if (exact - 0.5).abs() < 0.25 || signed.abs() < 1e-9 {
+            continue;
+        }
+        assert_eq!(
+            signed < 0.0,
+            exact >= 0.5,
+            "at {p:?}: {signed}, winding {exact}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 2500, "{checked}");
+}
