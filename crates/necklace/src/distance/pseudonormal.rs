@@ -20,8 +20,8 @@
 //! only when the four agree. Triangles of a crossing, the ring round them, those at a
 //! non-manifold or degenerate corner, those of a fold (two faces with a common corner
 //! that cross, which on an otherwise embedded surface takes it to this path too), those
-//! of two parts that touch (a corner or an edge
-//! of one on the other, within [`TOUCH_TOLERANCE`] of the diagonal: no crossing, yet
+//! of two parts that touch (a corner or an edge of one on the other, within
+//! [`TOUCH_TOLERANCE`] of the diagonal: no crossing, yet
 //! the winding number next to the contact is not the one off the triangle's middle, as
 //! for a part buried in another but for one corner on its surface), and those whose
 //! samples disagree leave the sign to the winding number at `p`.
@@ -310,8 +310,8 @@ const TOUCH_TOLERANCE: f64 = 1e-7;
 /// without repeats.
 fn folded_vertices(mesh: &SurfaceMesh, bvh: &Bvh) -> Vec<u32> {
     vertices_of_pairs(mesh, bvh, 0.0, |t, u, vt, vu| {
-        let common: Vec<usize> = (0..3).filter(|&k| vu.contains(&vt[k])).collect();
-        let [k] = common[..] else {
+        let mut common = (0..3).filter(|&k| vu.contains(&vt[k]));
+        let (Some(k), None) = (common.next(), common.next()) else {
             return false;
         };
         let Some(l) = (0..3).find(|&l| vu[l] == vt[k]) else {
