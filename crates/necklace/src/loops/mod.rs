@@ -13,7 +13,12 @@
 //!    Before those parallel planes, [`membrane`] builds the boundary of the saddle's
 //!    membrane (its descending disk for the exact distance) and keeps it when it goes
 //!    once around the saddle's axis ([`LoopOptions::membranes`]); each loop says which
-//!    construction gave it (`initial`).
+//!    construction gave it (`initial`). Where the plane through a cycle-closing saddle
+//!    cuts a loop that separates the surface (a saddle on a plateau of the distance, in
+//!    a bar wider than it is thick, whose Hessian does not tell the bar's direction),
+//!    planes through it turned over a hemisphere are cut, and the shortest loop of a
+//!    non-zero class that bounds a disk of the side replaces it
+//!    ([`LoopOptions::turned_planes`]).
 //! 2. [`tighten`](mod@tighten): shorten it into a closed geodesic, not tied to mesh edges. A loop that
 //!    collapses (slides off a cap) or does not settle is dropped with its reason.
 //! 3. Selection: drop loops longer than `max_length` × the bounding-box diagonal; keep one
@@ -193,6 +198,15 @@ pub struct LoopOptions {
     /// 3: necks measure 1.0–2.3 on the shared models, while loops round a plate (the
     /// skull's cheek bones 7.6–16, the elephant's ear 6.3) open out on both sides too.
     pub max_flatness: f64,
+    /// Where the plane through a cycle-closing saddle cuts a loop that separates the
+    /// surface (its class is 0), planes through the saddle in this many directions over
+    /// a hemisphere round the saddle's normal are cut, and the shortest loop of a non-zero
+    /// class that bounds a disk of the side replaces it ([`Initial::TurnedPlane`]). A
+    /// bar of a plate wider than the plate is thick lies on a plateau of the distance,
+    /// whose Hessian does not tell the bar's direction: the plane through the saddle
+    /// between the plate's middle hole and a corner hole of tm_plate_holes cut across
+    /// the whole plate. Default 64 (0 turns no plane).
+    pub turned_planes: usize,
 }
 
 /// When the saddle's membrane (module [`membrane`]) gives the initial loop.
@@ -216,6 +230,10 @@ pub enum Initial {
     Plane,
     /// The boundary of the saddle's membrane.
     Membrane,
+    /// A plane through the saddle turned from its normal: the shortest essential loop
+    /// over [`LoopOptions::turned_planes`] directions, where the saddle's own plane cut
+    /// a separating one.
+    TurnedPlane,
 }
 
 impl Default for LoopOptions {
@@ -238,6 +256,7 @@ impl Default for LoopOptions {
             min_opening: 0.1,
             opening_reach: 1.0,
             max_flatness: 3.0,
+            turned_planes: 64,
         }
     }
 }
@@ -283,15 +302,26 @@ pub fn find_loops_with_progress(
     let outcomes: Vec<std::result::Result<Candidate, DropReason>> = seeds
         .par_iter()
         .map(|seed| {
+            let measured = |s: Start| {
+                let mut c = measures.candidate(s.tightened, s.offset, s.initial);
+                c.sources = s.sources;
+                c.normal = s.normal;
+                // The inscribed radius at the saddle: the exact distance there.
+                let inscribed = distance.get().distance(seed.position);
+                c.flatness = (inscribed > 0.0)
+                    .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
+                c
+            };
             let outcome = loop_from_seed(surface, topology, &geometry, &distance, seed, options)
-                .map(|s| {
-                    let mut c = measures.candidate(s.tightened, s.offset, s.initial);
-                    c.sources = s.sources;
-                    // The inscribed radius at the saddle: the exact distance there.
-                    let inscribed = distance.get().distance(seed.position);
-                    c.flatness = (inscribed > 0.0)
-                        .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
-                    c
+                .map(measured)
+                .map(|c| {
+                    let separates = c.class.iter().all(|w| *w == 0);
+                    if separates && seed.role == Some(Role::CycleClosing) {
+                        turned(surface, topology, &geometry, &measures, seed, options)
+                            .map_or(c, measured)
+                    } else {
+                        c
+                    }
                 });
             progress.advance(1);
             outcome
@@ -405,6 +435,8 @@ struct Start {
     initial: Initial,
     /// A membrane's sources; empty for a plane.
     sources: Vec<[f64; 3]>,
+    /// The unit normal of the plane that gave it (the saddle's for a membrane).
+    normal: [f64; 3],
 }
 
 /// A tightened loop before selection.
@@ -416,6 +448,8 @@ struct Candidate {
     initial: Initial,
     /// A membrane's sources (see [`membrane::MembraneLoop::sources`]); empty for a plane.
     sources: Vec<[f64; 3]>,
+    /// The unit normal of the plane that gave it (the saddle's for a membrane).
+    normal: [f64; 3],
     /// Its Z2 homology class.
     class: Vec<u64>,
     /// When it separates the surface: the areas of its sides.
@@ -463,6 +497,7 @@ impl Measures<'_> {
             offset,
             initial,
             sources: Vec::new(),
+            normal: [0.0; 3],
             class,
             areas,
             opening,
@@ -533,6 +568,7 @@ fn loop_from_seed(
                 offset: 0.0,
                 initial: Initial::Membrane,
                 sources: m.sources,
+                normal: n,
             })
         })
     };
@@ -579,6 +615,7 @@ fn loop_from_seed(
                 offset,
                 initial: Initial::Plane,
                 sources: Vec::new(),
+                normal: n,
             });
         }
         if offset == 0.0 && options.membranes == MembraneUse::WherePlanesFail && !seed.disk_only {
@@ -608,6 +645,79 @@ fn loop_from_seed(
     }
 }
 
+/// The shortest tightened loop of a non-zero class over planes through the saddle in
+/// [`LoopOptions::turned_planes`] directions (a Fibonacci hemisphere round the seed's
+/// normal), among curves around the saddle that enclose no other curve of their plane
+/// (so the loop bounds a disk of the seed's side). The cut curves are ranked by length
+/// and tightened shortest first, until one keeps a non-zero class; `None` when none
+/// does.
+fn turned(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    geometry: &SurfaceGeometry,
+    measures: &Measures,
+    seed: &Seed,
+    options: &LoopOptions,
+) -> Option<Start> {
+    /// Tightened at most this many of the shortest essential curves.
+    const TRIED: usize = 4;
+    let k = options.turned_planes;
+    let n = scale(seed.normal, 1.0 / norm(seed.normal));
+    let (u, v) = plane_basis(n);
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let mut curves: Vec<(f64, usize, [f64; 3], cut::CutCurve)> = (0..k)
+        .into_par_iter()
+        .filter_map(|j| {
+            let z = (j as f64 + 0.5) / k as f64;
+            let (r, phi) = ((1.0 - z * z).sqrt(), golden * j as f64);
+            let normal = add(
+                scale(n, z),
+                add(scale(u, r * phi.cos()), scale(v, r * phi.sin())),
+            );
+            let plane = Plane {
+                origin: seed.position,
+                normal,
+            };
+            let mut cut = plane_cut(surface, topology, &plane);
+            let i = loop_around(surface, topology, &plane, &cut, seed.position)?;
+            if encloses_another(surface, topology, &plane, &cut, i) {
+                return None;
+            }
+            let curve = cut.swap_remove(i);
+            let class = measures
+                .basis
+                .class_of_crossings(curve.crossings.iter().map(|c| c.edge as usize));
+            if class.iter().all(|w| *w == 0) {
+                return None;
+            }
+            let length = closed_length(&curve.points(surface, topology));
+            Some((length, j, normal, curve))
+        })
+        .collect();
+    curves.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    curves
+        .into_iter()
+        .take(TRIED)
+        .find_map(|(_, _, normal, curve)| {
+            let t = tighten(
+                geometry,
+                &curve.crossings,
+                &curve.faces,
+                &tightening(seed, options),
+            );
+            let t = tightened(t).ok()?;
+            let crossed = classes::crossings(surface, topology, &t.surface_points);
+            let class = measures.basis.class_of_crossings(crossed);
+            class.iter().any(|w| *w != 0).then_some(Start {
+                tightened: t,
+                offset: 0.0,
+                initial: Initial::TurnedPlane,
+                sources: Vec::new(),
+                normal,
+            })
+        })
+}
+
 /// The shortest loop of `c`'s class over the parallel planes up to
 /// [`LoopOptions::slide_steps`] × [`LoopOptions::slide_step`] from the one that gave `c`
 /// (nearest first, + before −); `c` itself when none is shorter.
@@ -620,7 +730,10 @@ fn narrowest(
     c: Candidate,
     options: &LoopOptions,
 ) -> Candidate {
-    let (n, normals) = cutting_normals(seed, options);
+    let (n, normals) = match c.initial {
+        Initial::TurnedPlane => (c.normal, vec![c.normal]),
+        Initial::Plane | Initial::Membrane => cutting_normals(seed, options),
+    };
     let step = options.slide_step * surface.bbox_diagonal();
     let start = c.offset;
     let offsets: Vec<f64> = (1..=options.slide_steps)
@@ -647,7 +760,8 @@ fn narrowest(
         let Some(t) = t else { continue };
         // Shorter beyond round-off: the same geodesic reached again does not move it.
         if t.length < best.tightened.length * (1.0 - 1e-6) {
-            let mut other = measures.candidate(t, offset, Initial::Plane);
+            let mut other = measures.candidate(t, offset, best.initial);
+            other.normal = best.normal;
             if other.class == best.class {
                 other.flatness = best
                     .flatness

@@ -144,6 +144,9 @@ pub fn transfer_loops(
                     )
                     .ok()
                     .map(|m| (m.crossings, m.faces, m.sources)),
+                    // The turned plane's direction was the simplified surface's choice:
+                    // the faces under the loop and its best-fit plane carry it over.
+                    (Way::Same, Initial::TurnedPlane) => None,
                     (Way::Traced, _) => traced(surface, &to.topology, distance, &l.points, options)
                         .map(|(crossings, faces)| (crossings, faces, Vec::new())),
                     (Way::LoopPlane, _) => {
@@ -176,6 +179,7 @@ pub fn transfer_loops(
                     match (way, l.initial) {
                         (Way::Same, Initial::Plane) => "the same plane",
                         (Way::Same, Initial::Membrane) => "the saddle's membrane",
+                        (Way::Same, Initial::TurnedPlane) => "a turned plane",
                         (Way::Traced, _) => "the faces under that loop",
                         (Way::LoopPlane, _) => "the best-fit plane of that loop",
                     }

@@ -6,8 +6,8 @@ use std::f64::consts::PI;
 use necklace::loops::cut::{closed_length, loop_around, plane_cut, Plane};
 use necklace::loops::tighten::{tighten, SurfaceGeometry, TightenStatus};
 use necklace::loops::{
-    find_loops, DropReason, Initial, LoopOptions, MembraneFailure, MembraneUse, NeckLoop, Seed,
-    SurfacePoint, TightenOptions, Tightened,
+    find_loops, DropReason, Initial, LoopOptions, MembraneFailure, MembraneUse, NeckLoop, Role,
+    Seed, SurfacePoint, TightenOptions, Tightened,
 };
 use necklace::mesh::Topology;
 use necklace::morse::NormalSource;
@@ -1275,4 +1275,102 @@ fn where_the_selection_keeps_no_saddle_the_completions_find_every_handle_and_tun
             );
         }
     }
+}
+
+/// A square frame of `cell`-sized voxels: the plate `[0, 10]² × [0, 1]` without the hole
+/// `[3, 7]²`, so four bars 3 wide and 1 thick. Outward quads split in two.
+fn square_frame(cell: f64) -> SurfaceMesh {
+    let n = (10.0 / cell).round() as i64;
+    let (hole_lo, hole_hi) = ((3.0 / cell).round() as i64, (7.0 / cell).round() as i64);
+    let layers = (1.0 / cell).round() as i64;
+    let solid = |i: i64, j: i64, k: i64| {
+        (0..n).contains(&i)
+            && (0..n).contains(&j)
+            && (0..layers).contains(&k)
+            && !((hole_lo..hole_hi).contains(&i) && (hole_lo..hole_hi).contains(&j))
+    };
+    let mut index = std::collections::HashMap::new();
+    let mut positions = Vec::new();
+    let mut vertex = |p: [i64; 3]| {
+        *index.entry(p).or_insert_with(|| {
+            positions.push(p.map(|c| c as f64 * cell));
+            positions.len() as u32 - 1
+        })
+    };
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..layers {
+                if !solid(i, j, k) {
+                    continue;
+                }
+                for axis in 0..3 {
+                    for dir in [-1i64, 1] {
+                        let mut next = [i, j, k];
+                        next[axis] += dir;
+                        if solid(next[0], next[1], next[2]) {
+                            continue;
+                        }
+                        // The face's corners, counter-clockwise seen from outside.
+                        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                        let mut base = [i, j, k];
+                        if dir > 0 {
+                            base[axis] += 1;
+                        }
+                        let corner = |du: i64, dv: i64| {
+                            let mut c = base;
+                            c[u] += du;
+                            c[v] += dv;
+                            c
+                        };
+                        let mut quad = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
+                        if dir < 0 {
+                            quad.reverse();
+                        }
+                        let q = quad.map(&mut vertex);
+                        triangles.push([q[0], q[1], q[2]]);
+                        triangles.push([q[0], q[2], q[3]]);
+                    }
+                }
+            }
+        }
+    }
+    let mesh = SurfaceMesh::new(positions, triangles).unwrap();
+    assert!(mesh.signed_volume() > 0.0);
+    mesh
+}
+
+#[test]
+fn a_saddle_on_a_plateau_whose_plane_separates_turns_the_plane_round_its_bar() {
+    // A bar wider than the plate is thick: the distance is flat on its mid-plane, so
+    // the Hessian's normal may run along the bar. The plane x = 1.4 through the left
+    // bar cuts the whole plate without meeting the hole: a loop 22 long that separates.
+    // Turned, the shortest essential section through the saddle is the bar's, a
+    // rectangle 3 × 1 round: 8 long.
+    let frame = square_frame(0.5);
+    let seed = Seed {
+        position: [1.4, 5.1, 0.45],
+        normal: [1.0, 0.0, 0.0],
+        persistence: 5,
+        role: Some(Role::CycleClosing),
+        ..Seed::default()
+    };
+    let found = find_loops(&frame, &[seed], Side::Inside, &LoopOptions::default()).unwrap();
+    assert_eq!(found.loops.len(), 1, "{:?}", found.dropped);
+    let l = &found.loops[0];
+    assert_eq!(l.initial, Initial::TurnedPlane);
+    assert!(!l.separating);
+    assert!((l.length - 8.0).abs() < 0.02 * 8.0, "length {}", l.length);
+    // Not turned, the separating loop is dropped with its reason.
+    let options = LoopOptions {
+        turned_planes: 0,
+        ..LoopOptions::default()
+    };
+    let found = find_loops(&frame, &[seed], Side::Inside, &options).unwrap();
+    assert!(found.loops.is_empty());
+    assert!(
+        matches!(found.dropped[0].reason, DropReason::NotEssential { length } if length > 20.0),
+        "{:?}",
+        found.dropped
+    );
 }
