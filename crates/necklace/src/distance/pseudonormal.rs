@@ -39,7 +39,7 @@
 use rayon::prelude::*;
 
 use super::bvh::{segment_through, Bvh};
-use crate::geom::{add, cross, dot, norm, scale, sub};
+use crate::geom::{add, closest_on_segment, cross, dot, norm, scale, sub};
 use crate::mesh::{SurfaceMesh, Topology};
 
 /// Per triangle (in tree order): the face normal, the normals of its edges `ab`, `bc`,
@@ -70,7 +70,8 @@ struct OpenChain {
 /// exact one away from the surface).
 const FAST_ERROR: f64 = 0.05;
 
-/// Barycentric coordinates this close to 0 put the closest point on an edge or corner.
+/// A closest point this close to a corner or an edge, as a fraction of the triangle's
+/// longest edge (plus rounding at the coordinates' magnitude), lies on it.
 const FEATURE_EPSILON: f64 = 1e-9;
 
 /// The offset of a triangle's winding samples off its plane, as a fraction of its
@@ -245,28 +246,39 @@ impl Pseudonormals {
     /// or the pseudonormal is too close to perpendicular to `p − q` to tell.
     pub fn sign(&self, t: usize, tri: &[[f64; 3]; 3], q: [f64; 3], p: [f64; 3]) -> Option<f64> {
         let [a, b, c] = *tri;
-        let (v0, v1, v2) = (sub(b, a), sub(c, a), sub(q, a));
-        let (d00, d01, d11) = (dot(v0, v0), dot(v0, v1), dot(v1, v1));
-        let (d20, d21) = (dot(v2, v0), dot(v2, v1));
-        let denom = d00 * d11 - d01 * d01;
-        if denom.is_nan() || denom <= 0.0 {
+        // The feature `q` lies on, by its distance to the corners and edges: barycentric
+        // coordinates lose their digits on a needle (on a gear's face with a 0.02°
+        // corner, a point on an edge came out 1.1e-9 inside it, and the face's normal
+        // gave the wrong side of the sharp edge). Near an edge but inside, `p − q` is
+        // along the face's normal, and the edge's pseudonormal (the sum of its faces')
+        // gives the same sign unless the faces fold flat onto each other (a fold, not
+        // decided here).
+        let edges = [sub(b, a), sub(c, b), sub(a, c)];
+        let longest = edges.iter().map(|e| norm(*e)).fold(0.0, f64::max);
+        let magnitude = tri.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        let tolerance = FEATURE_EPSILON * longest + 4.0 * f64::EPSILON * magnitude;
+        if !(tolerance.is_finite() && longest > 0.0) {
             return None;
         }
-        let wb = (d11 * d20 - d01 * d21) / denom;
-        let wc = (d00 * d21 - d01 * d20) / denom;
-        let wa = 1.0 - wb - wc;
-        let zero = [wa, wb, wc].map(|w| w.abs() <= FEATURE_EPSILON);
+        let near = |x: [f64; 3]| norm(sub(q, x)) <= tolerance;
         let normals = &self.normals[t];
-        let n = match zero {
-            // On an edge: ab has wc = 0, bc has wa = 0, ca has wb = 0.
-            [false, false, true] => normals[1],
-            [true, false, false] => normals[2],
-            [false, true, false] => normals[3],
-            // At a corner: the one whose own coordinate is not 0.
-            [false, true, true] => normals[4],
-            [true, false, true] => normals[5],
-            [true, true, false] => normals[6],
-            _ => normals[0],
+        let n = if let Some(k) = [a, b, c].iter().position(|&x| near(x)) {
+            normals[4 + k]
+        } else {
+            let off_edge =
+                [(a, b), (b, c), (c, a)].map(|(x, y)| norm(sub(q, closest_on_segment(q, x, y))));
+            let (k, off) = off_edge
+                .iter()
+                .enumerate()
+                .fold(
+                    (0, f64::INFINITY),
+                    |best, (k, &o)| if o < best.1 { (k, o) } else { best },
+                );
+            if off <= tolerance {
+                normals[1 + k]
+            } else {
+                normals[0]
+            }
         };
         let d = sub(p, q);
         let s = dot(d, n);

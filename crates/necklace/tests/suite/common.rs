@@ -26,6 +26,17 @@ pub fn realworld_dir() -> PathBuf {
     }
 }
 
+/// A real-world model read as the pipeline reads it; `None` (after printing SKIPPED)
+/// when the file is absent.
+pub fn realworld_surface(name: &str) -> Option<necklace::pipeline::PreparedSurface> {
+    let path = realworld_dir().join(name);
+    if !path.is_file() {
+        println!("SKIPPED: no {}", path.display());
+        return None;
+    }
+    Some(necklace::pipeline::load_surface(&path).expect("a shared real-world model reads"))
+}
+
 /// The 21 shared mesh files, sorted; `None` (after printing SKIPPED) when the folder is
 /// absent.
 pub fn shared_meshes() -> Option<Vec<PathBuf>> {

@@ -545,18 +545,29 @@ fn a_fold_round_a_shared_corner_leaves_the_sign_there_to_the_winding_number() {
     // without a common corner cross; but at a hoof, faces with one corner in common do
     // (OBJ faces 2 and 4, round vertex 1: a fold). The pseudonormals there called points
     // below the hoof inside. The solid is where the exact winding number is at least ½.
-    let path = crate::common::realworld_dir().join("os_cow-low-resolution.obj");
-    if !path.is_file() {
-        println!("SKIPPED: no {}", path.display());
+    let Some(prepared) = crate::common::realworld_surface("os_cow-low-resolution.obj") else {
         return;
-    }
-    let prepared = necklace::pipeline::load_surface(&path).expect("the cow reads");
-    let distance = &prepared.distance;
+    };
     let fold = [2.33969, 0.032583, 0.756243];
-    let mut random = uniform(3);
+    let checked = signs_agree_round(&prepared.distance, fold, 0.8, 3000, 3);
+    assert!(checked > 2500, "{checked}");
+}
+
+/// Asserts that the sign of the distance is the exact winding number's (the solid is
+/// where it is at least ½) at `samples` random points of the cube of side `side`
+/// round `centre`, but those within ¼ of ½ or on the surface; returns how many were
+/// checked.
+fn signs_agree_round(
+    distance: &SurfaceDistance,
+    centre: [f64; 3],
+    side: f64,
+    samples: usize,
+    seed: u64,
+) -> usize {
+    let mut random = uniform(seed);
     let mut checked = 0;
-    for _ in 0..3000 {
-        let p = [0, 1, 2].map(|k| fold[k] + 0.8 * (random() - 0.5));
+    for _ in 0..samples {
+        let p = [0, 1, 2].map(|k| centre[k] + side * (random() - 0.5));
         let exact = distance.winding_number_exact(p);
         let signed = distance.signed_distance(p);
         if (exact - 0.5).abs() < 0.25 || signed.abs() < 1e-9 {
@@ -569,5 +580,23 @@ fn a_fold_round_a_shared_corner_leaves_the_sign_there_to_the_winding_number() {
         );
         checked += 1;
     }
-    assert!(checked > 2500, "{checked}");
+    checked
+}
+
+#[test]
+fn a_closest_point_on_a_needles_edge_takes_the_edges_pseudonormal() {
+    // vtk_gears.stl's face 3222 is a needle (a 0.02° corner, 5.08 long, 0.002 wide)
+    // along a concave edge. A point inside, 0.094 from it, has its closest point on the
+    // needle's long edge; its barycentric coordinates put that point 1.1e-9 inside the
+    // face, whose normal gave the outside. The solid is where the exact winding number
+    // is at least ½.
+    let Some(prepared) = crate::common::realworld_surface("vtk_gears.stl") else {
+        return;
+    };
+    let distance = &prepared.distance;
+    let inside = [-23.399624783412662, 0.0815533548347137, 7.568291314334779];
+    assert!(distance.winding_number_exact(inside) > 0.75);
+    assert!(distance.signed_distance(inside) < 0.0);
+    let checked = signs_agree_round(distance, inside, 0.4, 2000, 5);
+    assert!(checked > 1500, "{checked}");
 }
