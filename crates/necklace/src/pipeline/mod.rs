@@ -575,12 +575,22 @@ fn analyse_side(
     // The swept complex should have the surface's genus as its H1 rank, and the sweep
     // should find every one of its classes at every level.
     let cycle_rank = result.cycle_rank as i64;
+    // Where the surface crosses itself, its components' genus is not the solid's.
+    let crossing = prepared.distance.crossings().map_or(0, <[_]>::len);
     if let Some(g) = genus.filter(|&g| g != cycle_rank) {
-        warnings.push(format!(
-            "{name}: the interior vertices of the volume mesh span a complex of H1 rank \
-             {cycle_rank} (Z2), the surface has genus {g}: the superlevel sweep sees \
-             cycles that are not the surface's (thin parts; --h may change it)"
-        ));
+        warnings.push(if crossing > 0 {
+            format!(
+                "{name}: the interior vertices of the volume mesh span a complex of H1 rank \
+                 {cycle_rank} (Z2); the surface's components have genus {g}, but it crosses \
+                 itself ({crossing} pairs of triangles), so the solid it bounds may have another"
+            )
+        } else {
+            format!(
+                "{name}: the interior vertices of the volume mesh span a complex of H1 rank \
+                 {cycle_rank} (Z2), the surface has genus {g}: the superlevel sweep sees \
+                 cycles that are not the surface's (thin parts; --h may change it)"
+            )
+        });
     }
     let cycle_failure = result.steps.iter().find(|s| !s.cycles_ok);
     if let Some(s) = cycle_failure {
@@ -601,10 +611,17 @@ fn analyse_side(
     };
     let rank = loop_rank(&found.loops);
     if let Some(g) = genus.filter(|&g| g != rank as i64) {
-        warnings.push(format!(
-            "{name}: the {} loops have Z2 rank {rank}, the surface has genus {g}",
-            side.neck_name()
-        ));
+        warnings.push(if crossing > 0 {
+            format!(
+                "{name}: the {} loops have Z2 rank {rank}; the surface's components have genus {g}, but it crosses itself ({crossing} pairs of triangles), so the solid it bounds may have another",
+                side.neck_name()
+            )
+        } else {
+            format!(
+                "{name}: the {} loops have Z2 rank {rank}, the surface has genus {g}",
+                side.neck_name()
+            )
+        });
     }
     let homology = HomologyCheck {
         genus,

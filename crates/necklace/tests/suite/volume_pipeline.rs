@@ -458,3 +458,46 @@ fn a_side_meshed_within_a_step_of_its_budget_keeps_the_surfaces_topology_and_loo
         );
     }
 }
+
+#[test]
+fn where_the_surface_crosses_itself_a_rank_off_its_components_genus_is_said_to_be_so() {
+    // Two rings of genus 1 in one plane, each through the other's centre: their tubes
+    // cross twice, and the solid they bound has three holes (each ring's own and the
+    // lens between them), not the two their components add up to. The warning must
+    // not call 2 the surface's genus.
+    let ring = Shape::new(ShapeKind::Torus)
+        .with("res", 24.0)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    let mut moved = ring.clone();
+    for p in &mut moved.positions {
+        p[0] += 1.0;
+    }
+    let rings = union(&[ring, moved]);
+    let r = necklace::pipeline::find_necks(&rings, &necklace::pipeline::NeckOptions::default())
+        .unwrap();
+    assert!(
+        r.sides.iter().any(|s| s.homology.rank != 2),
+        "{:?}",
+        r.sides.iter().map(|s| s.homology).collect::<Vec<_>>()
+    );
+    for side in &r.sides {
+        if side.homology.rank != 2 {
+            assert!(
+                r.warnings.iter().any(|w| w.starts_with(side.side.name())
+                    && w.contains("crosses itself")
+                    && w.contains("genus 2")),
+                "{:?}",
+                r.warnings
+            );
+        }
+    }
+    assert!(
+        !r.warnings
+            .iter()
+            .any(|w| w.contains("the surface has genus")),
+        "{:?}",
+        r.warnings
+    );
+}
