@@ -427,7 +427,8 @@ pub struct MethodArgs {
     #[arg(long, default_value = "8G", value_parser = parse_memory, allow_negative_numbers = true)]
     pub max_memory: u64,
     /// The volume mesher: necklace's isosurface stuffing, the Delaunay tetrahedralization
-    /// of points sampled on the surface (`sampled`, experimental), or TetGen "pq1.2"
+    /// of points sampled on the surface (`sampled`, experimental), restricted Delaunay
+    /// refinement from those points (`refined`, experimental), or TetGen "pq1.2"
     /// (needs a build with --features tetgen, which is AGPL-3.0).
     #[arg(long, value_enum, default_value = "stuffing")]
     pub mesher: MesherArg,
@@ -511,6 +512,7 @@ pub enum MesherArg {
     Stuffing,
     Tetgen,
     Sampled,
+    Refined,
 }
 
 pub fn parse_param(s: &str) -> std::result::Result<(String, f64), String> {
@@ -530,6 +532,7 @@ impl From<MesherArg> for Mesher {
             MesherArg::Stuffing => Mesher::Stuffing,
             MesherArg::Tetgen => Mesher::Tetgen,
             MesherArg::Sampled => Mesher::Sampled,
+            MesherArg::Refined => Mesher::Refined,
         }
     }
 }

@@ -38,7 +38,7 @@ use super::repair::faces_of;
 use rustc_hash::FxHashMap as HashMap;
 
 /// No neighbour (a face on the outside of the far points).
-const NONE: u32 = u32::MAX;
+pub(super) const NONE: u32 = u32::MAX;
 
 /// The far points' distance from the centre, in units of the points' extent.
 const FAR: f64 = 1000.0;
@@ -111,11 +111,11 @@ impl Tetrahedralization {
 }
 
 /// The far points come first in the triangulation's numbering.
-const FAR_POINTS: usize = 4;
+pub(super) const FAR_POINTS: usize = 4;
 
 /// The points' indices along a Morton (Z-order) curve over their bounding box, ties by
 /// index.
-fn morton_order(points: &[[f64; 3]], lo: [f64; 3], hi: [f64; 3]) -> Vec<u32> {
+pub(super) fn morton_order(points: &[[f64; 3]], lo: [f64; 3], hi: [f64; 3]) -> Vec<u32> {
     let extent = (0..3)
         .map(|k| hi[k] - lo[k])
         .fold(0.0, f64::max)
@@ -144,18 +144,27 @@ fn morton_order(points: &[[f64; 3]], lo: [f64; 3], hi: [f64; 3]) -> Vec<u32> {
     keyed.into_iter().map(|(_, i)| i).collect()
 }
 
-/// Tets under construction: vertices (the points, then the four far points), and per
-/// tet the neighbour across the face opposite each corner.
-struct Triangulation {
+/// The tets a point's insertion removes, and the faces of their union's boundary.
+pub(super) struct Cavity {
+    /// The tets whose circumsphere holds the point strictly (connected).
+    pub(super) tets: Vec<u32>,
+    /// Each face of the cavity's boundary: a cavity tet and its corner opposite the face.
+    pub(super) boundary: Vec<(u32, usize)>,
+}
+
+/// Tets under construction: vertices (the four far points, then the points), and per
+/// tet the neighbour across the face opposite each corner. Refinement (`refined`) works
+/// on it directly.
+pub(super) struct Triangulation {
     /// The points, then the four far points.
-    points: Vec<[f64; 3]>,
+    pub(super) points: Vec<[f64; 3]>,
     /// Tets with `orient3d(a, b, c, d) > 0` (Shewchuk's sign: `d` below `abc`).
-    tets: Vec<[u32; 4]>,
+    pub(super) tets: Vec<[u32; 4]>,
     /// `neighbours[t][i]`: the tet across the face opposite corner `i`.
-    neighbours: Vec<[u32; 4]>,
+    pub(super) neighbours: Vec<[u32; 4]>,
     /// Removed tets, whose slots are reused.
     free: Vec<u32>,
-    alive: Vec<bool>,
+    pub(super) alive: Vec<bool>,
     /// The tet the next walk starts from.
     last: u32,
     /// Per tet, the insertion that last visited it (the cavity search's marks).
@@ -174,7 +183,7 @@ fn coord(p: [f64; 3]) -> Coord3D<f64> {
 }
 
 impl Triangulation {
-    fn new(lo: [f64; 3], hi: [f64; 3]) -> Self {
+    pub(super) fn new(lo: [f64; 3], hi: [f64; 3]) -> Self {
         let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
         let extent = (0..3)
             .map(|k| hi[k] - lo[k])
@@ -244,24 +253,36 @@ impl Triangulation {
 
     /// Insert point `v`; returns the earlier point at the same position instead, if any.
     fn insert(&mut self, v: u32) -> Option<u32> {
+        match self.cavity(v) {
+            Ok(cavity) => {
+                self.fill(v, &cavity);
+                None
+            }
+            Err(same) => Some(same),
+        }
+    }
+
+    /// The cavity of point `v` (not yet inserted): the tets whose circumsphere holds it
+    /// strictly, connected to the one that holds it, and the faces of its boundary (tet,
+    /// corner opposite). Nothing changes. Returns the earlier point at the same position
+    /// instead, if any.
+    pub(super) fn cavity(&mut self, v: u32) -> std::result::Result<Cavity, u32> {
         let start = self.locate(v);
         let position = self.points[v as usize];
         if let Some(&same) = self.tets[start as usize]
             .iter()
             .find(|&&c| self.points[c as usize] == position)
         {
-            return Some(same);
+            return Err(same);
         }
-        // The cavity: tets whose circumsphere holds the point strictly, connected to
-        // the one that holds it.
         self.stamp += 1;
         let stamp = self.stamp;
-        let mut cavity = vec![start];
+        let mut tets = vec![start];
         self.visited[start as usize] = stamp;
         let mut boundary: Vec<(u32, usize)> = Vec::new();
         let mut head = 0;
-        while head < cavity.len() {
-            let t = cavity[head];
+        while head < tets.len() {
+            let t = tets[head];
             head += 1;
             for i in 0..4 {
                 let next = self.neighbours[t as usize][i];
@@ -270,18 +291,26 @@ impl Triangulation {
                 }
                 if next != NONE && self.in_sphere(next, v) {
                     self.visited[next as usize] = stamp;
-                    cavity.push(next);
+                    tets.push(next);
                 } else {
                     boundary.push((t, i));
                 }
             }
         }
+        Ok(Cavity { tets, boundary })
+    }
+
+    /// Replace `cavity` (of point `v`, just found by [`Self::cavity`]) by the tets that
+    /// join each face of its boundary to `v`. Returns the new tets' slots (the cavity's
+    /// slots are reused first).
+    pub(super) fn fill(&mut self, v: u32, cavity: &Cavity) -> Vec<u32> {
         // Each boundary face joined to the point: tet `t` with corner `i` replaced. The
         // faces through the point are shared by two new tets, matched by their edge.
+        let boundary = &cavity.boundary;
         let mut made = Vec::with_capacity(boundary.len());
         let mut edges: HashMap<(u32, u32), (u32, usize)> = HashMap::default();
         let mut new_tets = Vec::with_capacity(boundary.len());
-        for &(t, i) in &boundary {
+        for &(t, i) in boundary {
             let mut tet = self.tets[t as usize];
             tet[i] = v;
             let outside = self.neighbours[t as usize][i];
@@ -296,7 +325,7 @@ impl Triangulation {
             };
             new_tets.push((tet, outside, back));
         }
-        for t in &cavity {
+        for t in &cavity.tets {
             self.alive[*t as usize] = false;
             self.free.push(*t);
         }
@@ -351,7 +380,7 @@ impl Triangulation {
         }
         debug_assert!(edges.is_empty(), "the cavity's boundary is closed");
         self.last = made[0];
-        None
+        made
     }
 
     /// The live tets without a far point, numbered without the far points, in our

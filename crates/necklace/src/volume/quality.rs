@@ -186,7 +186,10 @@ fn improve_vertex(
                     continue;
                 }
                 let s = star_score(positions, q);
-                if s > choice.map_or(best, |c| c.1) * (1.0 + 1e-9) + 1e-12 {
+                // (Relative to the magnitude: an inverted star, at −1, must not
+                // accept a move that leaves it inverted.)
+                let base = choice.map_or(best, |c| c.1);
+                if s > base + 1e-9 * base.abs() + 1e-12 {
                     choice = Some((q, s));
                 }
             }

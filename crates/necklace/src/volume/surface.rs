@@ -39,6 +39,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::prediction::predict;
+use super::refined::RefinedStats;
 use super::sampled::SampledStats;
 use super::surface_sizing::{
     sample_thickness, sharp_features, thickness, thin_part_sizing, ThicknessSamples, CELLS_ACROSS,
@@ -66,6 +67,10 @@ pub enum Mesher {
     /// The Delaunay tetrahedralization of points sampled on the surface at its
     /// thickness and graded inside, carved by the surface (`sampled`; experimental).
     Sampled,
+    /// Restricted Delaunay refinement from the same samples: cells labelled by the
+    /// surface, refined until the boundary's faces and the cells are well shaped
+    /// (`refined`; experimental).
+    Refined,
 }
 
 /// Options of [`volume_mesh`].
@@ -140,6 +145,8 @@ pub struct VolumeResult {
     pub stats: Option<StuffingStats>,
     /// What the sampled mesher did (with [`Mesher::Sampled`]).
     pub sampled: Option<SampledStats>,
+    /// What the refinement mesher did (with [`Mesher::Refined`]).
+    pub refined: Option<RefinedStats>,
     /// Surface vertices whose part or gap is thinner than `2h`.
     pub thin_vertices: usize,
     /// Points on the surface's triangles where the thickness was measured besides
@@ -238,6 +245,8 @@ pub struct VolumeReport {
     pub stuffing: Option<StuffingStats>,
     /// What the sampled mesher did (with [`Mesher::Sampled`]).
     pub sampled: Option<SampledStats>,
+    /// What the refinement mesher did (with [`Mesher::Refined`]).
+    pub refined: Option<RefinedStats>,
     /// One line per thing to know (see [`VolumeResult::warnings`]).
     pub warnings: Vec<String>,
     /// Wall-clock seconds.
@@ -295,6 +304,7 @@ impl VolumeResult {
             thickness_samples: self.thickness_samples,
             stuffing: self.stats,
             sampled: self.sampled,
+            refined: self.refined,
             warnings: self.warnings.clone(),
             seconds: self.seconds,
         }
@@ -410,7 +420,9 @@ pub fn survey_surface(
         None => distance.self_intersections(&surface.triangles),
     };
     let sizing = match options.mesher {
-        Mesher::Stuffing | Mesher::Sampled => Some(size_surface(surface, distance, &crossings, h)),
+        Mesher::Stuffing | Mesher::Sampled | Mesher::Refined => {
+            Some(size_surface(surface, distance, &crossings, h))
+        }
         Mesher::Tetgen => None,
     };
     let thin_vertices = sizing.as_ref().map_or(0, |s| {
@@ -483,11 +495,15 @@ pub fn volume_mesh_within(
         None
     };
     let mut sampled = None;
+    let mut refined = None;
     let mut budget_bound = false;
     let (mesh, found, stats, rounds, samples) = match &survey.sizing {
         Some(sizing) if options.mesher == Mesher::Sampled => {
             let sphere = (side == Side::Outside).then_some((centre, radius));
-            let (mesh, s) = sampled_surface(surface, distance, sizing, sphere, h, options)?;
+            let (mesh, s) = match sampled_surface(surface, distance, sizing, sphere, h, options)? {
+                (mesh, DelaunayStats::Sampled(s)) => (mesh, s),
+                (_, DelaunayStats::Refined(_)) => unreachable!("the sampled mesher was asked for"),
+            };
             if s.missing_triangles > 0 {
                 warnings.push(format!(
                     "{} of the {} boundary triangles of the sampled {} volume mesh are not faces of its tetrahedralization after {} rounds of bisection: the carving may cross the surface there",
@@ -495,6 +511,33 @@ pub fn volume_mesh_within(
                 ));
             }
             sampled = Some(s);
+            let found = mesh.topology();
+            (mesh, found, None, 1, 0)
+        }
+        Some(sizing) if options.mesher == Mesher::Refined => {
+            let sphere = (side == Side::Outside).then_some((centre, radius));
+            let (mesh, s) = match sampled_surface(surface, distance, sizing, sphere, h, options)? {
+                (mesh, DelaunayStats::Refined(s)) => (mesh, s),
+                (_, DelaunayStats::Sampled(_)) => {
+                    unreachable!("the refinement mesher was asked for")
+                }
+            };
+            if s.over_budget {
+                budget_bound = true;
+                warnings.push(format!(
+                    "the refined {} volume mesh stopped at the memory budget ({}) before every face and cell was refined",
+                    side.name(),
+                    super::memory_text(options.max_memory as f64)
+                ));
+            }
+            if s.non_manifold > 0 {
+                warnings.push(format!(
+                    "the refined {} volume mesh's boundary is not a manifold at {} edges or vertices (refinement there was within the guard)",
+                    side.name(),
+                    s.non_manifold
+                ));
+            }
+            refined = Some(s);
             let found = mesh.topology();
             (mesh, found, None, 1, 0)
         }
@@ -594,6 +637,7 @@ pub fn volume_mesh_within(
         budget_bound,
         stats,
         sampled,
+        refined,
         thin_vertices: survey.thin_vertices,
         thickness_samples: samples,
         topology: TopologyCheck {
@@ -1008,7 +1052,8 @@ fn sampled_surface(
     sphere: Option<([f64; 3], f64)>,
     h: f64,
     options: &VolumeOptions,
-) -> Result<(TetMesh, SampledStats)> {
+) -> Result<(TetMesh, DelaunayStats)> {
+    use super::refined::{mesh_refined, RefinedOptions};
     use super::sampled::{
         bisect_triangles, mesh_sampled, sphere_mesh, Sample, SampledOptions, SpacingField,
     };
@@ -1038,10 +1083,24 @@ fn sampled_surface(
         min_dihedral_deg: options.min_dihedral_deg,
         ..SampledOptions::default()
     };
+    let refined = RefinedOptions {
+        max_tets: sampled.max_tets,
+        min_dihedral_deg: options.min_dihedral_deg,
+        ..RefinedOptions::default()
+    };
+    let mesh = |domain: &dyn Domain, samples: &[Sample], field: &SpacingField, boundary| {
+        if options.mesher == Mesher::Refined {
+            mesh_refined(domain, samples, field, &refined)
+                .map(|(m, s)| (m, DelaunayStats::Refined(s)))
+        } else {
+            mesh_sampled(domain, boundary, samples, field, &sampled)
+                .map(|(m, s)| (m, DelaunayStats::Sampled(s)))
+        }
+    };
     match sphere {
         None => {
             let samples = boundary.samples(&field);
-            mesh_sampled(&inside, &boundary, &samples, &field, &sampled)
+            mesh(&inside, &samples, &field, &boundary)
         }
         Some((centre, radius)) => {
             let shell = Shell::new(inside, centre, radius);
@@ -1050,9 +1109,15 @@ fn sampled_surface(
             let samples = boundary.samples(&field);
             let field = SpacingField::new(&samples, coarse);
             let samples = boundary.samples(&field);
-            mesh_sampled(&shell, &boundary, &samples, &field, &sampled)
+            mesh(&shell, &samples, &field, &boundary)
         }
     }
+}
+
+/// What one of the two Delaunay meshers did.
+enum DelaunayStats {
+    Sampled(SampledStats),
+    Refined(RefinedStats),
 }
 
 #[cfg(feature = "tetgen")]
