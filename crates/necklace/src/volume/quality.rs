@@ -326,4 +326,24 @@ mod tests {
         assert!(stats.min_dihedral_after_deg >= 20.0, "{stats:?}");
         assert_eq!(stats.below_target_after, 0);
     }
+
+    #[test]
+    fn a_vertex_whose_star_stays_inverted_wherever_it_goes_is_not_moved() {
+        // Two tets on one triangle with the apex on both: above the plane one is
+        // inverted, below it the other, so no move can help. A move must not be taken
+        // for the star's score of −1 staying −1 (the vertex walked off along a
+        // direction of the compass, step after step).
+        let apex = [0.2, 0.3, 1.0];
+        let mut positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], apex];
+        let tets = vec![[0, 1, 2, 3], [1, 0, 2, 3]];
+        let mobility = vec![
+            Mobility::Fixed,
+            Mobility::Fixed,
+            Mobility::Fixed,
+            Mobility::Free,
+        ];
+        let stats = improve(&mut positions, &tets, &mobility, &|p| p, 10.0);
+        assert_eq!(stats.moves, 0, "{stats:?}");
+        assert_eq!(positions[3], apex);
+    }
 }

@@ -59,11 +59,11 @@ use super::chords::split_chords;
 use super::delaunay::{Cavity, Triangulation, FAR_POINTS, NONE};
 use super::quality::{improve, score, Mobility, QualityStats};
 use super::repair::repair_pinches;
-use super::sampled::{Sample, SpacingField};
+use super::sampled::{vertex_kinds, Sample, SpacingField};
 use super::Domain;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, cross, dot, norm, scale, sub};
-use crate::tet::{renumber_used, TetMesh, VertexKind};
+use crate::tet::{renumber_used, TetMesh};
 
 /// Options of [`mesh_refined`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -274,17 +274,7 @@ pub fn mesh_refined(
             options.min_dihedral_deg,
         );
     }
-    let kinds: Vec<VertexKind> = positions
-        .iter()
-        .zip(&interior)
-        .map(|(p, &inside)| {
-            if inside {
-                VertexKind::Interior
-            } else {
-                domain.boundary_kind(*p)
-            }
-        })
-        .collect();
+    let kinds = vertex_kinds(domain, &positions, &interior);
     stats.seconds[3] = clock.elapsed().as_secs_f64();
     let mesh = TetMesh::new(positions, tets, kinds)?;
     Ok((mesh, stats))
@@ -557,7 +547,7 @@ impl<'a> Refiner<'a> {
             let (centre, radius2) = circumsphere(p);
             let inside = tet.iter().all(|&v| v >= far)
                 && in_box(centre, self.bounds)
-                && self.domain.value(centre) < -LABEL_TOLERANCE * radius2.sqrt();
+                && self.label_value(centre, radius2) < -LABEL_TOLERANCE * radius2.sqrt();
             let generation = self.cells[s].generation.wrapping_add(1);
             self.cells[s] = Cell {
                 circumcentre: centre,
@@ -663,6 +653,14 @@ impl<'a> Refiner<'a> {
                 PointKind::DoubleCrossing
             },
         });
+    }
+
+    /// The domain's value at a cell's circumcentre, exact within a quarter of its
+    /// circumradius of the boundary and of the right sign beyond (only the sign
+    /// labels the cell, and far from the boundary it is cheaper than the distance).
+    fn label_value(&self, centre: [f64; 3], radius2: f64) -> f64 {
+        self.domain
+            .values_within(&[centre], LABEL_BAND * radius2.sqrt())[0]
     }
 
     /// Queue tet `s` for splitting if it is inside and badly shaped or too large.
@@ -893,6 +891,10 @@ fn clip(a: [f64; 3], b: [f64; 3], (lo, hi): ([f64; 3], [f64; 3])) -> Option<([f6
 /// same volume, and an inside one would be flat in the mesh).
 pub const LABEL_TOLERANCE: f64 = 1e-9;
 
+/// A cell's label asks for the domain's exact value within this fraction of its
+/// circumradius of the boundary (and only its sign beyond).
+const LABEL_BAND: f64 = 0.25;
+
 /// A tet's volume over its longest edge cubed, under which four boundary vertices make
 /// a flat sliver (six times a regular tet's is 0.118; refined slivers of real meshes
 /// stay above 1e-3, flat ones on a plane fall under 1e-12).
@@ -941,4 +943,39 @@ fn smallest_angle(p: [[f64; 3]; 3]) -> f64 {
             norm(cross(a, b)).atan2(dot(a, b))
         })
         .fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_circumsphere_passes_through_the_four_corners_and_a_flat_tet_gets_a_finite_one() {
+        let p = [
+            [0.1, 0.2, 0.3],
+            [2.0, 0.1, -0.4],
+            [0.3, 1.7, 0.2],
+            [-0.2, 0.4, 1.9],
+        ];
+        let (c, r2) = circumsphere(p);
+        for q in p {
+            assert!((dist2(c, q) - r2).abs() < 1e-12 * r2, "{q:?}");
+        }
+        let flat = [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+        let (c, r2) = circumsphere(flat);
+        assert!(c.iter().all(|x| x.is_finite()) && r2.is_finite() && r2 > 0.0);
+        assert_eq!(relative_volume(flat), 0.0);
+        assert!(relative_volume(p) > FLAT);
+    }
+
+    #[test]
+    fn a_segment_is_clipped_to_the_box_or_missed() {
+        let unit = ([0.0; 3], [1.0; 3]);
+        let (a, b) = clip([-1.0, 0.5, 0.5], [3.0, 0.5, 0.5], unit).expect("it crosses");
+        assert_eq!((a, b), ([0.0, 0.5, 0.5], [1.0, 0.5, 0.5]));
+        assert!(clip([-1.0, 2.0, 0.5], [3.0, 2.0, 0.5], unit).is_none());
+        assert!(clip([2.0, 2.0, 2.0], [3.0, 3.0, 3.0], unit).is_none());
+        let inside = ([0.2, 0.3, 0.4], [0.6, 0.7, 0.8]);
+        assert_eq!(clip(inside.0, inside.1, unit), Some(inside));
+    }
 }

@@ -268,6 +268,25 @@ fn build_spacing_tree(samples: &mut [Sample], offset: usize, nodes: &mut Vec<Spa
     build_spacing_tree(right, offset + mid, nodes);
 }
 
+/// The kinds of a carved mesh's vertices: interior, or the domain's kind of boundary.
+pub(super) fn vertex_kinds(
+    domain: &dyn Domain,
+    positions: &[[f64; 3]],
+    interior: &[bool],
+) -> Vec<VertexKind> {
+    positions
+        .iter()
+        .zip(interior)
+        .map(|(p, &inside)| {
+            if inside {
+                VertexKind::Interior
+            } else {
+                domain.boundary_kind(*p)
+            }
+        })
+        .collect()
+}
+
 /// Mesh `domain` by the Delaunay tetrahedralization of `samples` (points on its
 /// boundary, with their spacing) and interior points graded from them; `field` gives
 /// the spacing near the boundary (built from the samples).
@@ -402,17 +421,7 @@ pub fn mesh_sampled(
             options.min_dihedral_deg,
         );
     }
-    let kinds: Vec<VertexKind> = positions
-        .iter()
-        .zip(&interior_flags)
-        .map(|(p, &inside)| {
-            if inside {
-                VertexKind::Interior
-            } else {
-                domain.boundary_kind(*p)
-            }
-        })
-        .collect();
+    let kinds = vertex_kinds(domain, &positions, &interior_flags);
     stats.seconds[3] = clock.elapsed().as_secs_f64();
     let mesh = TetMesh::new(positions, tets, kinds)?;
     Ok((mesh, stats))

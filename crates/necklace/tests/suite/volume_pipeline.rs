@@ -415,6 +415,51 @@ fn the_sampled_mesher_carves_clean_surfaces_along_them_and_reports_where_it_cann
 }
 
 #[test]
+fn the_refinement_mesher_bounds_a_torus_by_the_surface_with_its_topology_and_volume() {
+    // The experimental restricted Delaunay refinement (`Mesher::Refined`) on the
+    // analytic torus R = 1, r = 0.3 drawn by marching tetrahedra (long thin
+    // triangles, where the sampled mesher cannot recover its boundary): both sides get
+    // the surface's topology, no tet is flat or inverted, the boundary vertices lie on
+    // the surface, and the inside holds the surface's volume to its chordal error.
+    let options = VolumeOptions {
+        mesher: Mesher::Refined,
+        h: Some(0.15),
+        ..VolumeOptions::default()
+    };
+    let torus = Shape::new(ShapeKind::Torus)
+        .with("res", 20.0)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    for side in [Side::Inside, Side::Outside] {
+        let v = volume_mesh(&torus, side, &options).unwrap();
+        let r = v.report();
+        let s = r.refined.expect("the refinement mesher's statistics");
+        assert_eq!(r.topology.matches, Some(true), "{side:?}: {r:?}");
+        assert!(!s.over_budget && s.non_manifold == 0, "{side:?}: {s:?}");
+        assert!(r.hausdorff_to_surface < 1e-9, "{side:?}: {r:?}");
+        assert!((0..v.mesh.num_tets()).all(|t| v.mesh.tet_volume(t) > 0.0));
+        assert!(r.interior_vertices > 0 && s.circumcentres > 0, "{s:?}");
+        if side == Side::Inside {
+            let exact = torus.signed_volume();
+            assert!(
+                (r.volume - exact).abs() / exact < 0.005,
+                "{} vs {exact}",
+                r.volume
+            );
+        }
+    }
+    let mesh_with = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| volume_mesh(&torus, Side::Inside, &options).unwrap())
+    };
+    assert_eq!(mesh_with(1).mesh, mesh_with(2).mesh);
+}
+
+#[test]
 fn a_side_meshed_within_a_step_of_its_budget_keeps_the_surfaces_topology_and_loop_ranks() {
     // th_65004.stl: a genus-2 Thingi10K part whose slivers ask for cells the budget
     // floors. With budget steps, meshed within a sixteenth of each side's budget first, both sides keep
