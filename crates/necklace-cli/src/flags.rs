@@ -58,8 +58,10 @@ pub enum Command {
         /// is built.
         #[arg(long, default_value = "8G", value_parser = parse_memory, allow_negative_numbers = true)]
         max_memory: u64,
-        /// The volume mesher: necklace's isosurface stuffing, or TetGen "pq1.2" (needs a
-        /// build with --features tetgen, which is AGPL-3.0).
+        /// The volume mesher: necklace's isosurface stuffing, the Delaunay
+        /// tetrahedralization of points sampled on the surface (`sampled`, experimental),
+        /// restricted Delaunay refinement from those points (`refined`, experimental), or
+        /// TetGen "pq1.2" (needs a build with --features tetgen, which is AGPL-3.0).
         #[arg(long, value_enum, default_value = "stuffing")]
         mesher: MesherArg,
         /// Output tet mesh (.vtu, .mesh, .node or .msh).

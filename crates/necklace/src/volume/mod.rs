@@ -70,6 +70,16 @@
 //! inside, then runs `chords` and `quality` with the samples fixed; [`SampledStats`] go
 //! in the report, and a warning where triangles stay unrecovered.
 //!
+//! A third, experimental too ([`Mesher::Refined`], `--mesher refined`): `refined`
+//! inserts the same samples into one Delaunay tetrahedralization (`delaunay`, whose
+//! cavity and fill steps it drives), labels each cell by the domain's sign at its
+//! circumcentre, takes as boundary the faces whose dual Voronoi edge crosses the
+//! domain's boundary, and refines boundary faces (size, angle, corners off it) before
+//! cells (radius–edge ratio, size; a circumcentre in a boundary face's surface ball is
+//! replaced by that ball's centre), with manifold repair and a guard against
+//! non-termination; then `repair`, `chords` and `quality`. [`RefinedStats`] go in the
+//! report, and warnings where the budget or the guard left work undone.
+//!
 //! Conventions: lengths in the domain's units; output tets positively oriented; vertex
 //! kinds from the sign (inside: interior) and [`Domain::boundary_kind`] (on the zero
 //! set). Entry points: [`stuff_volume`] for any domain, [`volume_mesh`] for a surface.

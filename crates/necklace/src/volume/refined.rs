@@ -62,7 +62,7 @@ use super::repair::repair_pinches;
 use super::sampled::{vertex_kinds, Sample, SpacingField};
 use super::Domain;
 use crate::error::{Error, ErrorKind, Result};
-use crate::geom::{add, cross, dot, norm, scale, sub};
+use crate::geom::{add, cross, dot, scale, sub};
 use crate::tet::{renumber_used, TetMesh};
 
 /// Options of [`mesh_refined`].
@@ -635,7 +635,7 @@ impl<'a> Refiner<'a> {
             let p = [0, 1, 2].map(|k| self.t.points[corners[k] as usize]);
             radius > self.options.facet_size * spacing
                 || corners.iter().any(|&v| !self.on_boundary[v as usize])
-                || smallest_angle(p) < self.options.facet_angle_deg.to_radians()
+                || has_angle_below(p, self.options.facet_angle_deg.to_radians().cos())
         };
         if !bad {
             return;
@@ -935,14 +935,15 @@ fn circumsphere(p: [[f64; 3]; 4]) -> ([f64; 3], f64) {
     (centroid, radius2)
 }
 
-/// A triangle's smallest angle, radians.
-fn smallest_angle(p: [[f64; 3]; 3]) -> f64 {
-    (0..3)
-        .map(|k| {
-            let (a, b) = (sub(p[(k + 1) % 3], p[k]), sub(p[(k + 2) % 3], p[k]));
-            norm(cross(a, b)).atan2(dot(a, b))
-        })
-        .fold(f64::INFINITY, f64::min)
+/// Whether a triangle has an angle whose cosine is above `cos_bound` (an angle below
+/// the bound's angle, for bounds up to 90°).
+fn has_angle_below(p: [[f64; 3]; 3], cos_bound: f64) -> bool {
+    (0..3).any(|k| {
+        let (a, b) = (sub(p[(k + 1) % 3], p[k]), sub(p[(k + 2) % 3], p[k]));
+        let d = dot(a, b);
+        // cos > bound, without the square roots: d > bound·|a||b|.
+        d > 0.0 && d * d > cos_bound * cos_bound * dot(a, a) * dot(b, b)
+    })
 }
 
 #[cfg(test)]
@@ -966,6 +967,20 @@ mod tests {
         assert!(c.iter().all(|x| x.is_finite()) && r2.is_finite() && r2 > 0.0);
         assert_eq!(relative_volume(flat), 0.0);
         assert!(relative_volume(p) > FLAT);
+    }
+
+    #[test]
+    fn a_triangle_has_an_angle_below_a_bound_when_its_smallest_is() {
+        let cos20 = 20f64.to_radians().cos();
+        let equilateral = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.75f64.sqrt(), 0.0]];
+        assert!(!has_angle_below(equilateral, cos20));
+        assert!(has_angle_below(equilateral, 61f64.to_radians().cos()));
+        let needle = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.1, 0.0]];
+        assert!(has_angle_below(needle, cos20));
+        let obtuse = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.2, 0.0]];
+        // Angles 21.8°, 21.8° and 136.4°.
+        assert!(!has_angle_below(obtuse, cos20));
+        assert!(has_angle_below(obtuse, 22f64.to_radians().cos()));
     }
 
     #[test]
