@@ -547,7 +547,10 @@ impl<'a> Refiner<'a> {
             let (centre, radius2) = circumsphere(p);
             let inside = tet.iter().all(|&v| v >= far)
                 && in_box(centre, self.bounds)
-                && self.label_value(centre, radius2) < -LABEL_TOLERANCE * radius2.sqrt();
+                && match self.inherited_label(s as u32, centre, stamp) {
+                    Some(inside) => inside,
+                    None => self.label_value(centre, radius2) < -LABEL_TOLERANCE * radius2.sqrt(),
+                };
             let generation = self.cells[s].generation.wrapping_add(1);
             self.cells[s] = Cell {
                 circumcentre: centre,
@@ -653,6 +656,35 @@ impl<'a> Refiner<'a> {
                 PointKind::DoubleCrossing
             },
         });
+    }
+
+    /// The label of new tet `s` (circumcentre `centre`) from its old neighbour across
+    /// the face opposite the new vertex, where the segment between their circumcentres
+    /// crosses no boundary, cast both ways (a ray skips hits at its very start). `None`
+    /// where that cannot be said: no such neighbour, a crossing, or a tet of four
+    /// boundary vertices (a flat one has its circumcentre on the boundary, where
+    /// [`LABEL_TOLERANCE`] decides).
+    fn inherited_label(&self, s: u32, centre: [f64; 3], stamp: u32) -> Option<bool> {
+        let tet = self.t.tets[s as usize];
+        if tet.iter().all(|&v| self.on_boundary[v as usize]) {
+            return None;
+        }
+        let v = (self.t.points.len() - 1) as u32;
+        let i = tet.iter().position(|&c| c == v)?;
+        let n = self.t.neighbours[s as usize][i];
+        if n == NONE
+            || self.made_at[n as usize] == stamp
+            || self.t.tets[n as usize].iter().any(|&c| (c as usize) < FAR_POINTS)
+        {
+            return None;
+        }
+        let from = self.cells[n as usize].circumcentre;
+        if !in_box(from, self.bounds) {
+            return None;
+        }
+        let crosses = self.domain.crossing(from, centre).is_some()
+            || self.domain.crossing(centre, from).is_some();
+        (!crosses).then_some(self.cells[n as usize].inside)
     }
 
     /// The domain's value at a cell's circumcentre, exact within a quarter of its
