@@ -674,7 +674,9 @@ impl<'a> Refiner<'a> {
         let n = self.t.neighbours[s as usize][i];
         if n == NONE
             || self.made_at[n as usize] == stamp
-            || self.t.tets[n as usize].iter().any(|&c| (c as usize) < FAR_POINTS)
+            || self.t.tets[n as usize]
+                .iter()
+                .any(|&c| (c as usize) < FAR_POINTS)
         {
             return None;
         }
