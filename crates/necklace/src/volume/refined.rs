@@ -128,7 +128,7 @@ pub struct RefinedStats {
     pub delaunay_tets: usize,
     /// Tets labelled inside and kept (the mesh, before chords).
     pub kept_tets: usize,
-    /// Tets labelled inside with four boundary vertices and a volume under [`FLAT`]
+    /// Tets labelled inside with four boundary vertices and a volume under `FLAT` (10⁻⁹)
     /// times the longest edge cubed (a flat sliver on a planar part of the boundary).
     pub flat_slivers: usize,
     /// Boundary vertices of the mesh that are not boundary samples or surface centres.
