@@ -118,7 +118,8 @@ pub struct RefinedStats {
     pub circumcentres: usize,
     /// Circumcentres refused because they lay in a boundary face's surface ball.
     pub encroachments: usize,
-    /// Faces and cells left bad because their point was within the guard of a vertex.
+    /// Times a face or cell was found bad but its point lay within the guard of a
+    /// vertex, so it was left (an element is counted at each evaluation).
     pub accepted_bad: usize,
     /// Whether refinement stopped at the memory budget (`max_tets`).
     pub over_budget: bool,

@@ -532,9 +532,10 @@ pub fn volume_mesh_within(
             }
             if s.non_manifold > 0 {
                 warnings.push(format!(
-                    "the refined {} volume mesh's boundary is not a manifold at {} edges or vertices (refinement there was within the guard)",
+                    "refinement of the {} volume mesh left its boundary not a manifold at {} edges or vertices (within the guard); pinch repair dropped {} tets there",
                     side.name(),
-                    s.non_manifold
+                    s.non_manifold,
+                    s.pinch_tets
                 ));
             }
             refined = Some(s);
