@@ -35,6 +35,10 @@ const FOLD_RATIO: f64 = 20.0;
 /// An edge whose two faces' normals differ by more than this is a crease.
 const CREASE_DEG: f64 = 40.0;
 
+/// A ray across a part meets the other wall within this angle of the wall's normal; one
+/// that meets it more obliquely skims along the surface (see [`faces_ray`]).
+const MAX_INCIDENCE_DEG: f64 = 60.0;
+
 /// Most shrinking steps of the inscribed ball at a vertex (each a closest-point query);
 /// a ball still shrinking after them is taken as not thin.
 const MEDIAL_STEPS: usize = 8;
@@ -69,7 +73,7 @@ pub(super) fn thickness(
                     .get(face as usize)
                     .is_some_and(|t| !t.contains(&v32))
             };
-            measure(distance, p, normals[v], shortest[v], limit, &far)
+            measure(surface, distance, p, normals[v], shortest[v], limit, &far)
         })
         .collect()
 }
@@ -93,12 +97,14 @@ fn shortest_edges(surface: &SurfaceMesh) -> Vec<f64> {
 /// The thickness of the solid behind the surface point `p` and the width of the gap in
 /// front of it (`normal`: the unit outward normal there), each when below `limit`, else
 /// infinity. On each side a ray along the normal looks for the other wall within
-/// `limit`; where it finds one on a triangle `far` from `p`, the thickness is the
+/// `limit`; where it finds one on a triangle `far` from `p` that faces it
+/// ([`faces_ray`]), the thickness is the
 /// diameter of the largest ball touching the surface at `p` whose other contact lies
 /// across the part (shrinking-ball medial distance, started from the ray's chord), or
 /// the chord where no ball tells. A thickness below 1/[`FOLD_RATIO`] of `shortest` is
 /// a fold of the surface, not a part (infinity).
 fn measure(
+    surface: &SurfaceMesh,
     distance: &SurfaceDistance,
     p: [f64; 3],
     normal: [f64; 3],
@@ -113,7 +119,7 @@ fn measure(
         let Some((hit, face)) = distance.ray_hit(p, d, limit) else {
             return f64::INFINITY;
         };
-        if !far(face) {
+        if !far(face) || !faces_ray(surface, face, d, direction) {
             return f64::INFINITY;
         }
         // The ball's diameter is the thickness across a plate or a wire whatever the
@@ -126,6 +132,19 @@ fn measure(
             f64::INFINITY
         }
     })
+}
+
+/// Whether a ray along the unit `d` that set out into the solid (`direction` −1) or into
+/// the gap (+1) meets `face` as the other wall of a part: it leaves the solid through the
+/// face's back (into the solid) or enters it through its front (into the gap), within
+/// [`MAX_INCIDENCE_DEG`] of the face's normal. A ray that meets a face the other way, or
+/// grazing it, crossed no part: the vertex normal at a crease drawn with sliver
+/// triangles can point nearly along one of its sheets, and the ray skims along that
+/// sheet, meeting it again a hair's breadth away where it bends.
+fn faces_ray(surface: &SurfaceMesh, face: u32, d: [f64; 3], direction: f64) -> bool {
+    let normal = surface.face_normal_scaled(face as usize);
+    let length = norm(normal);
+    length > 0.0 && -direction * dot(d, normal) >= MAX_INCIDENCE_DEG.to_radians().cos() * length
 }
 
 /// Unit vertex normals (area-weighted face normals summed; zero where they cancel).
@@ -302,7 +321,7 @@ pub(super) fn sample_thickness(
                         .is_some_and(|t| !t.iter().any(|v| home.contains(v)))
                 };
                 let (p, n) = (samples.positions[i], samples.normals[i]);
-                measure(distance, p, n, shortest, limit, &far)
+                measure(surface, distance, p, n, shortest, limit, &far)
             })
             .collect();
         samples.thickness.extend(measured);
@@ -500,19 +519,31 @@ mod tests {
             [40.0, 1.5],
             [0.0, 1.5],
         ];
+        prism(&profile, &[0.0, 40.0])
+    }
+
+    /// The closed prism of a profile in x–z (star-shaped from its first corner)
+    /// extruded along y through `rows`, its caps fans from that corner, oriented
+    /// outward.
+    fn prism(profile: &[[f64; 2]], rows: &[f64]) -> SurfaceMesh {
+        let n = profile.len() as u32;
         let mut positions = Vec::new();
-        for y in [0.0, 40.0] {
+        for &y in rows {
             positions.extend(profile.iter().map(|&[x, z]| [x, y, z]));
         }
         let mut triangles = Vec::new();
-        for i in 0..6u32 {
-            let j = (i + 1) % 6;
-            triangles.push([i, j, 6 + j]);
-            triangles.push([i, 6 + j, 6 + i]);
+        for row in 0..rows.len() as u32 - 1 {
+            let (a, b) = (row * n, (row + 1) * n);
+            for i in 0..n {
+                let j = (i + 1) % n;
+                triangles.push([a + i, a + j, b + j]);
+                triangles.push([a + i, b + j, b + i]);
+            }
         }
-        for k in 1..5u32 {
+        let last = (rows.len() as u32 - 1) * n;
+        for k in 1..n - 1 {
             triangles.push([0, k + 1, k]);
-            triangles.push([6, 6 + k, 6 + k + 1]);
+            triangles.push([last, last + k, last + k + 1]);
         }
         let mut mesh = SurfaceMesh::new(positions, triangles).unwrap();
         if mesh.signed_volume() < 0.0 {
@@ -584,5 +615,45 @@ mod tests {
             .map(|c| c[0])
             .fold(f64::INFINITY, f64::min);
         assert!(spread < 1.0, "{spread}");
+    }
+
+    /// A block 10 × 10 × 10 (the profile in x–z extruded along y, rows at y = 0, 5, 10)
+    /// whose side x = 10 is drawn, just below the top edge, with a strip of sliver
+    /// triangles that zigzag by 10⁻⁴ (the profile (10, 10) → (10.0001, 9.995) →
+    /// (9.9999, 9.99) → (10, 0)), as a CAD export draws a fillet's end.
+    fn block_with_a_zigzag_under_its_edge() -> SurfaceMesh {
+        let profile = [
+            [0.0, 0.0],
+            [10.0, 0.0],
+            [9.9999, 9.99],
+            [10.0001, 9.995],
+            [10.0, 10.0],
+            [0.0, 10.0],
+        ];
+        prism(&profile, &[0.0, 5.0, 10.0])
+    }
+
+    #[test]
+    fn a_ray_that_skims_along_a_crease_measures_no_part() {
+        let block = block_with_a_zigzag_under_its_edge();
+        assert!((block.signed_volume() - 1000.0).abs() < 1e-2);
+        let topology = Topology::new(&block);
+        let distance = SurfaceDistance::new(&block);
+        let skip = vec![false; block.num_vertices()];
+        let limit = 2.0;
+        // Rays into the solid from the top edge's corners and the zigzag's run down
+        // the side and leave it through the zigzag a hundredth below, nearly along
+        // its plane (without the incidence test: "thicknesses" of 0.011 and 0.017).
+        // The block is 10 thick: nothing on it is thinner than the limit.
+        let t = thickness(&block, &topology, &distance, &skip, limit);
+        assert!(t.iter().flatten().all(|x| x.is_infinite()), "{t:?}");
+        // A ray that meets a wall head-on crosses a part; one along it does not.
+        let top = (0..block.num_triangles())
+            .find(|&f| block.corners(f).iter().all(|c| c[2] == 10.0))
+            .unwrap() as u32;
+        assert!(faces_ray(&block, top, [0.0, 0.0, 1.0], -1.0));
+        assert!(!faces_ray(&block, top, [0.0, 0.0, -1.0], -1.0));
+        assert!(faces_ray(&block, top, [0.0, 0.0, -1.0], 1.0));
+        assert!(!faces_ray(&block, top, [1.0, 0.0, 0.01], -1.0));
     }
 }
