@@ -37,7 +37,7 @@ const CREASE_DEG: f64 = 40.0;
 
 /// A ray across a part meets the other wall within this angle of the wall's normal; one
 /// that meets it more obliquely skims along the surface (see [`faces_ray`]).
-const MAX_INCIDENCE_DEG: f64 = 60.0;
+const MAX_INCIDENCE_DEG: f64 = 80.0;
 
 /// Most shrinking steps of the inscribed ball at a vertex (each a closest-point query);
 /// a ball still shrinking after them is taken as not thin.
