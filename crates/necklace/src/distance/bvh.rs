@@ -57,10 +57,17 @@ impl Node {
         let mut t0 = 0.0f64;
         let mut t1 = t_max;
         for k in 0..3 {
+            if inv[k].is_infinite() {
+                // Parallel to the slab: always in it, or never. (The product below would
+                // be 0 · ∞ = NaN for an origin on the slab's face, as on a grid of CAD
+                // vertices, and lose the box.)
+                if o[k] < self.lo[k] || o[k] > self.hi[k] {
+                    return None;
+                }
+                continue;
+            }
             let a = (self.lo[k] - o[k]) * inv[k];
             let b = (self.hi[k] - o[k]) * inv[k];
-            // `min`/`max` ignore a NaN (0 · ∞ when the origin is on a slab with d = 0),
-            // which keeps the test conservative.
             t0 = t0.max(a.min(b));
             t1 = t1.min(a.max(b));
         }

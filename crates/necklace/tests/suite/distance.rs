@@ -277,6 +277,50 @@ fn overlapping_spheres_give_winding_number_two() {
     assert!(!sd.is_inside([0.5, 0.0, 2.0]));
 }
 
+/// Two squares 10 × 10 drawn as 8 × 8 grids, at z = 0 and z = 0.1 (facing each other).
+fn two_grids() -> SurfaceMesh {
+    let n = 8;
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for (z, up) in [(0.0, true), (0.1, false)] {
+        let base = positions.len() as u32;
+        for i in 0..=n {
+            for j in 0..=n {
+                positions.push([1.25 * i as f64, 1.25 * j as f64, z]);
+            }
+        }
+        for i in 0..n {
+            for j in 0..n {
+                let a = base + i * (n + 1) + j;
+                let (b, c, d) = (a + n + 1, a + n + 2, a + 1);
+                if up {
+                    triangles.extend([[a, b, c], [a, c, d]]);
+                } else {
+                    triangles.extend([[a, c, b], [a, d, c]]);
+                }
+            }
+        }
+    }
+    SurfaceMesh::new(positions, triangles).unwrap()
+}
+
+#[test]
+fn a_ray_along_an_axis_through_a_grids_vertices_and_edges_hits_it() {
+    // From every vertex and edge midpoint of the lower grid, straight up: the ray runs
+    // along the faces of boxes of the hierarchy (the grid's coordinates) and meets the
+    // upper grid at a vertex or on an edge.
+    let grids = two_grids();
+    let sd = SurfaceDistance::new(&grids);
+    for i in 0..=16 {
+        for j in 0..=16 {
+            let o = [0.625 * i as f64, 0.625 * j as f64, 0.0];
+            let hit = sd.ray_hit(o, [0.0, 0.0, 1.0], 1.0);
+            let (t, _) = hit.unwrap_or_else(|| panic!("the ray up from {o:?} misses"));
+            assert!((t - 0.1).abs() < 1e-12, "{o:?}: {t}");
+        }
+    }
+}
+
 #[test]
 fn ray_hits_sphere_and_misses_elsewhere() {
     let mesh = sphere(24.0);
