@@ -26,10 +26,12 @@ pub(super) const CELLS_ACROSS: f64 = 2.0;
 /// next to the vertex) when it is at least this angle round the ball from the vertex.
 const MIN_SEPARATION_DEG: f64 = 120.0;
 
-/// A part or gap thinner than 1/`FOLD_RATIO` of the shortest edge at a vertex is taken
-/// for a fold of the surface there, not refined for: a real thin part is drawn with
-/// edges not much longer than its thickness somewhere around it (a plate's rim, a
-/// wire's section).
+/// A part or gap thinner than 1/`FOLD_RATIO` of the shortest edge at a vertex, whose
+/// other wall is a triangle beside the vertex's own (it has a corner on their ring), is
+/// taken for a fold of the surface there, not refined for: a real thin part is drawn
+/// with edges not much longer than its thickness somewhere around it (a plate's rim, a
+/// wire's section). A wall farther along the surface, or on another part, is a part
+/// or a gap however long the edges (two plates drawn with a few big triangles each).
 const FOLD_RATIO: f64 = 20.0;
 
 /// An edge whose two faces' normals differ by more than this is a crease.
@@ -47,7 +49,7 @@ const MEDIAL_STEPS: usize = 8;
 /// width of the gap in front of it, each when below `limit` (else infinity), by
 /// [`measure`] along the vertex normal. A contact or hit on a triangle at the vertex
 /// does not count, nor a thickness below 1/[`FOLD_RATIO`] of the vertex's shortest edge
-/// (a fold, not a part).
+/// across to a triangle beside the vertex's own (a fold, not a part).
 pub(super) fn thickness(
     surface: &SurfaceMesh,
     topology: &Topology,
@@ -73,9 +75,44 @@ pub(super) fn thickness(
                     .get(face as usize)
                     .is_some_and(|t| !t.contains(&v32))
             };
-            measure(surface, distance, p, normals[v], shortest[v], limit, &far)
+            let ring = ring_of(surface, faces.iter().copied());
+            let beside = |face: u32| touches(surface, face, &ring);
+            let walls = Walls {
+                far: &far,
+                beside: &beside,
+            };
+            measure(surface, distance, p, normals[v], shortest[v], limit, &walls)
         })
         .collect()
+}
+
+/// The corners of `faces`, sorted, without repeats (a vertex's ring with the vertex).
+fn ring_of(surface: &SurfaceMesh, faces: impl Iterator<Item = u32>) -> Vec<u32> {
+    let mut ring: Vec<u32> = faces
+        .filter_map(|f| surface.triangles.get(f as usize))
+        .flatten()
+        .copied()
+        .collect();
+    ring.sort_unstable();
+    ring.dedup();
+    ring
+}
+
+/// Whether `face` has a corner in the sorted `ring`.
+fn touches(surface: &SurfaceMesh, face: u32, ring: &[u32]) -> bool {
+    surface
+        .triangles
+        .get(face as usize)
+        .is_some_and(|t| t.iter().any(|v| ring.binary_search(v).is_ok()))
+}
+
+/// Which triangles can be the other wall of a part at a point, for [`measure`].
+struct Walls<'a> {
+    /// Not at the point (a contact or hit on the point's own triangles does not count).
+    far: &'a dyn Fn(u32) -> bool,
+    /// Beside the point's own triangles: a wall there closer than 1/[`FOLD_RATIO`] of
+    /// the shortest edge is a fold.
+    beside: &'a dyn Fn(u32) -> bool,
 }
 
 /// The shortest edge at each vertex (infinite at a vertex on no triangle): a wall much
@@ -97,12 +134,13 @@ fn shortest_edges(surface: &SurfaceMesh) -> Vec<f64> {
 /// The thickness of the solid behind the surface point `p` and the width of the gap in
 /// front of it (`normal`: the unit outward normal there), each when below `limit`, else
 /// infinity. On each side a ray along the normal looks for the other wall within
-/// `limit`; where it finds one on a triangle `far` from `p` that faces it
+/// `limit`; where it finds one on a triangle far from `p` (`walls`) that faces it
 /// ([`faces_ray`]), the thickness is the
 /// diameter of the largest ball touching the surface at `p` whose other contact lies
 /// across the part (shrinking-ball medial distance, started from the ray's chord), or
-/// the chord where no ball tells. A thickness below 1/[`FOLD_RATIO`] of `shortest` is
-/// a fold of the surface, not a part (infinity).
+/// the chord where no ball tells. A thickness below 1/[`FOLD_RATIO`] of `shortest`
+/// across to a triangle beside `p`'s own is a fold of the surface, not a part
+/// (infinity).
 fn measure(
     surface: &SurfaceMesh,
     distance: &SurfaceDistance,
@@ -110,8 +148,9 @@ fn measure(
     normal: [f64; 3],
     shortest: f64,
     limit: f64,
-    far: &dyn Fn(u32) -> bool,
+    walls: &Walls,
 ) -> [f64; 2] {
+    let far = walls.far;
     [-1.0, 1.0].map(|direction| {
         let d = scale(normal, direction);
         // A ray that meets no other wall within the limit leaves room for a ball of
@@ -126,7 +165,8 @@ fn measure(
         // normal (the ray's chord is only a bound on it).
         let ball = 2.0 * medial_radius(distance, p, d, 0.5 * hit, far);
         let t = if ball.is_finite() { ball } else { hit };
-        if t < limit && t * FOLD_RATIO >= shortest {
+        let fold = t * FOLD_RATIO < shortest && (walls.beside)(face);
+        if t < limit && !fold {
             t
         } else {
             f64::INFINITY
@@ -222,7 +262,8 @@ pub(super) const FINEST_SAMPLE: f64 = 1.0 / 16.0;
 /// reaching into the plate would otherwise ask for the rim's cells over those
 /// triangles' whole area. Triangles with a `skip` corner (crossings) are not split. A
 /// point added is a fold (not thin) where its thickness is below 1/[`FOLD_RATIO`] of
-/// the shortest edge at any corner of its triangle, as a vertex is against its own.
+/// the shortest edge at any corner of its triangle across to a triangle beside it (a
+/// corner on the corners' rings), as a vertex is against its own.
 /// At most [`MAX_SAMPLES`] points are added (`bound` says when that stopped it).
 pub(super) fn sample_thickness(
     surface: &SurfaceMesh,
@@ -234,6 +275,7 @@ pub(super) fn sample_thickness(
     use rayon::prelude::*;
     use rustc_hash::FxHashMap;
     let shortest_edge = shortest_edges(surface);
+    let topology = Topology::new(surface);
     let mut samples = ThicknessSamples {
         positions: surface.positions.clone(),
         normals: vertex_normals(surface),
@@ -320,8 +362,18 @@ pub(super) fn sample_thickness(
                         .get(face as usize)
                         .is_some_and(|t| !t.iter().any(|v| home.contains(v)))
                 };
+                let ring = ring_of(
+                    surface,
+                    home.iter()
+                        .flat_map(|&v| topology.vertex_faces(v as usize).iter().copied()),
+                );
+                let beside = |face: u32| touches(surface, face, &ring);
+                let walls = Walls {
+                    far: &far,
+                    beside: &beside,
+                };
                 let (p, n) = (samples.positions[i], samples.normals[i]);
-                measure(surface, distance, p, n, shortest, limit, &far)
+                measure(surface, distance, p, n, shortest, limit, &walls)
             })
             .collect();
         samples.thickness.extend(measured);

@@ -2,10 +2,10 @@
 //! many small parts, needles and plates at the budget, refusals, the angle bound in
 //! refined thin parts.
 
-use crate::common::{sphere, union, Inside};
+use crate::common::{sphere, split_in_four, union, Inside};
 
 use necklace::shapes::{Shape, ShapeKind};
-use necklace::tet::{ComponentTopology, TetTopology};
+use necklace::tet::{ComponentTopology, TetTopology, VertexKind};
 use necklace::volume::{expected_topology, volume_mesh, VolumeOptions, BYTES_PER_TET};
 use necklace::volume::{stuff_volume, StuffingOptions};
 use necklace::Side;
@@ -163,6 +163,52 @@ fn four_hundred_separate_tetrahedra_are_four_hundred_components_with_their_volum
         r.volume
     );
     assert!(r.min_dihedral_deg >= 8.0, "{}", r.min_dihedral_deg);
+}
+
+/// Two slabs 10 × 10 × 1, one above the other, `gap` apart, drawn with edges of 1.25 so
+/// that their faces' vertices look squarely across the gap.
+fn two_slabs_a_hair_apart(gap: f64) -> SurfaceMesh {
+    let slab = |z: f64| {
+        let mut m = cuboid([0.0, 0.0, z], [10.0, 10.0, z + 1.0]);
+        for _ in 0..3 {
+            m = split_in_four(&m);
+        }
+        m
+    };
+    union(&[slab(0.0), slab(1.0 + gap)])
+}
+
+#[test]
+fn a_gap_between_grids_is_seen_at_its_vertices_and_kept_on_both_sides() {
+    // Thinner than 1/20 of the faces' edges (1.25), but across to another part: a gap,
+    // not a fold of the surface.
+    let gap = 0.06;
+    let slabs = two_slabs_a_hair_apart(gap);
+    let options = VolumeOptions::default();
+    // Inside: two slabs, kept apart, with their volume. The gap (h = diagonal / 64 =
+    // 0.22) is measured at the vertices of the faces across it, whose rays straight
+    // across run along the faces of the distance hierarchy's boxes (at least the 7 × 7
+    // inner vertices of each face).
+    let inside = volume_mesh(&slabs, Side::Inside, &options).unwrap();
+    let r = inside.report();
+    assert!(r.thin_vertices >= 98, "{} thin vertices", r.thin_vertices);
+    assert_eq!(r.topology.matches, Some(true), "{}", r.topology.found);
+    assert_eq!(r.components, 2);
+    assert!((r.volume - 200.0).abs() < 1.0, "volume {}", r.volume);
+    // Outside: the shell reaches into the gap, with interior vertices across all of it
+    // (the field the tunnels are read from has room there).
+    let outside = volume_mesh(&slabs, Side::Outside, &options).unwrap();
+    let r = outside.report();
+    assert_eq!(r.topology.matches, Some(true), "{}", r.topology.found);
+    let mesh = &outside.mesh;
+    let mut found = [[false; 8]; 8];
+    for (p, kind) in mesh.positions.iter().zip(&mesh.kinds) {
+        let in_gap = p[2] > 1.0 && p[2] < 1.0 + gap && (1.0..9.0).contains(&p[0]);
+        if *kind == VertexKind::Interior && in_gap && (1.0..9.0).contains(&p[1]) {
+            found[(p[0] - 1.0) as usize][(p[1] - 1.0) as usize] = true;
+        }
+    }
+    assert!(found.iter().flatten().all(|&f| f), "{found:?}");
 }
 
 /// A valid mesh (positive tets, one component) or a one-line refusal that names the
