@@ -211,6 +211,36 @@ fn a_gap_between_grids_is_seen_at_its_vertices_and_kept_on_both_sides() {
     assert!(found.iter().flatten().all(|&f| f), "{found:?}");
 }
 
+#[test]
+fn two_cubes_drawn_with_their_corners_keep_the_gap_between_them_on_both_sides() {
+    // Two cubes of side 10, 0.2 apart, each drawn with its 8 corners: no vertex looks
+    // across the gap (their normals run along the cubes' diagonals), and the first
+    // meshing (h = diagonal / 64 = 0.39) joins them. The thickness sampled over the
+    // triangles finds the gap: 1/50 of the triangles' edges, but across to another
+    // part, so not a fold of the surface.
+    let cubes = union(&[
+        cuboid([0.0; 3], [10.0; 3]),
+        cuboid([10.2, 0.0, 0.0], [20.2, 10.0, 10.0]),
+    ]);
+    for side in [Side::Inside, Side::Outside] {
+        let v = volume_mesh(&cubes, side, &VolumeOptions::default()).unwrap();
+        let r = v.report();
+        assert_eq!(
+            r.topology.matches,
+            Some(true),
+            "{side:?}: {}",
+            r.topology.found
+        );
+        assert_eq!(v.thin_vertices, 0, "{side:?}");
+        assert!(v.thickness_samples > 0, "{side:?}");
+        assert_eq!(r.topology.rounds, 2, "{side:?}");
+        if side == Side::Inside {
+            assert_eq!(r.components, 2);
+            assert!((r.volume - 2000.0).abs() < 20.0, "volume {}", r.volume);
+        }
+    }
+}
+
 /// A valid mesh (positive tets, one component) or a one-line refusal that names the
 /// budget's option.
 fn valid_or_refused(surface: &SurfaceMesh, side: Side, options: &VolumeOptions) {
