@@ -12,15 +12,17 @@
 //!
 //! On a surface, [`volume_mesh`] / [`volume_mesh_with`] (`surface`) is the whole stage:
 //! the topology the surface predicts ([`expected_topology`]: from the components' genus
-//! and nesting), thickness and gaps measured by rays and inscribed balls into sizing
-//! features, and creases and corners to snap onto (`surface_sizing`), then meshing
+//! and nesting), thickness and gaps measured by rays and inscribed balls (at the vertices
+//! and at the middles of faces their normals do not see) into sizing features, and
+//! creases and corners to snap onto (`surface_sizing`), then meshing
 //! (below); where the first mesh's topology differs from the prediction, a meshing sized
 //! by the thickness sampled over the triangles too (those that are long or whose corners
 //! disagree; made once, for the first side that asks), then refinement rounds. The
 //! measures do not depend on the side: [`survey_surface`] makes them once (thickness
 //! and gaps at every vertex, creases, crossings, the report the prediction reads) and
 //! [`volume_mesh_surveyed`] meshes a side from them (the pipeline meshes both sides from
-//! one survey).
+//! one survey): a thin part or gap gets two cells across, but a thin part of the solid
+//! one in the shell's mesh, which only has to stay out of it.
 //!
 //! Steps (Labelle & Shewchuk, "Isosurface Stuffing", SIGGRAPH 2007):
 //! 1. `octree`: an octree, balanced bottom-up, whose cells have size `h` wherever the

@@ -42,8 +42,8 @@ use super::prediction::predict;
 use super::refined::RefinedStats;
 use super::sampled::SampledStats;
 use super::surface_sizing::{
-    sample_thickness, sharp_features, thickness, thin_part_sizing, ThicknessSamples, CELLS_ACROSS,
-    MAX_SAMPLES, THIN_FACTOR,
+    measure_surface, sample_thickness, sharp_features, thin_part_sizing, ThicknessSamples,
+    CELLS_ACROSS, MAX_SAMPLES, THIN_FACTOR,
 };
 use super::{
     spacing_floor, stuff_volume, SharpFeatures, Shell, SizingFeature, StuffingOptions,
@@ -368,20 +368,24 @@ struct SurfaceSizing {
     /// Per vertex, the thickness of the solid and the width of the gap (infinite where
     /// not thin).
     thickness: Vec<[f64; 2]>,
+    /// The thickness at the vertices and at the faces they do not see
+    /// ([`measure_surface`]): where [`sample_thickness`] starts.
+    measured: ThicknessSamples,
     /// Per vertex, the cell size asked for (half the thinner of the two, at most `h`).
     spacing: Vec<f64>,
-    /// Thin parts and gaps as measured at the vertices, and the crossing curve, as
-    /// sizing features.
-    sizing: Vec<SizingFeature>,
+    /// Thin parts and gaps as measured at the vertices and faces, and the crossing curve,
+    /// as sizing features: for the mesh of the solid (0) and of the gap (1).
+    sizing: [Vec<SizingFeature>; 2],
     /// The crossing curve's sizing features alone.
     crossing_sizing: Vec<SizingFeature>,
     /// Vertices whose thickness is not measured (at crossings).
     skip: Vec<bool>,
     /// The thickness limit (`THIN_FACTOR` × h).
     limit: f64,
-    /// The sizing by the thickness sampled over the triangles too: made the first
-    /// time a side asks (its vertices' sizing gave another topology), then shared.
-    sampled: std::sync::OnceLock<SampledSizing>,
+    /// The sizing by the thickness sampled over the triangles too, for each side as
+    /// `sizing`: made the first time the side asks (its vertices' sizing gave another
+    /// topology).
+    sampled: [std::sync::OnceLock<SampledSizing>; 2],
     /// The thickness sampled over the triangles ([`sample_thickness`]): made the first
     /// time a side asks (the sampled sizing, or the sampled mesher), then shared.
     samples: std::sync::OnceLock<ThicknessSamples>,
@@ -697,7 +701,8 @@ fn size_surface(
         crossing[v as usize] = true;
     }
     let topology = Topology::new(surface);
-    let thickness = thickness(surface, &topology, distance, &crossing, THIN_FACTOR * h);
+    let measured = measure_surface(surface, &topology, distance, &crossing, THIN_FACTOR * h);
+    let thickness = measured.thickness[..surface.num_vertices()].to_vec();
     let spacing: Vec<f64> = thickness
         .iter()
         .map(|t| (t[0].min(t[1]) / CELLS_ACROSS).min(h))
@@ -727,15 +732,19 @@ fn size_surface(
             toward: [0.0; 3],
         })
         .collect();
-    let mut sizing = thin_part_sizing(&ThicknessSamples::at_vertices(surface, &thickness));
-    sizing.extend(&crossing_sizing);
+    let sizing = [0, 1].map(|covered| {
+        let mut sizing = thin_part_sizing(&measured, covered);
+        sizing.extend(&crossing_sizing);
+        sizing
+    });
     SurfaceSizing {
         sizing,
         crossing_sizing,
         skip: crossing,
         limit: THIN_FACTOR * h,
-        sampled: std::sync::OnceLock::new(),
+        sampled: Default::default(),
         samples: std::sync::OnceLock::new(),
+        measured,
         thickness,
         spacing,
         features,
@@ -754,11 +763,17 @@ struct SampledSizing {
 }
 
 impl SurfaceSizing {
-    /// The sizing by the thickness sampled over the triangles, made on the first call.
-    fn sampled(&self, surface: &SurfaceMesh, distance: &SurfaceDistance) -> &SampledSizing {
-        self.sampled.get_or_init(|| {
+    /// The sizing by the thickness sampled over the triangles for the mesh of the solid
+    /// (`covered` 0) or the gap (1), made on the first call.
+    fn sampled(
+        &self,
+        surface: &SurfaceMesh,
+        distance: &SurfaceDistance,
+        covered: usize,
+    ) -> &SampledSizing {
+        self.sampled[covered].get_or_init(|| {
             let samples = self.samples(surface, distance);
-            let mut sizing = thin_part_sizing(samples);
+            let mut sizing = thin_part_sizing(samples, covered);
             sizing.extend(&self.crossing_sizing);
             SampledSizing {
                 sizing,
@@ -771,7 +786,15 @@ impl SurfaceSizing {
     /// The thickness sampled over the triangles, made on the first call.
     fn samples(&self, surface: &SurfaceMesh, distance: &SurfaceDistance) -> &ThicknessSamples {
         self.samples.get_or_init(|| {
-            sample_thickness(surface, distance, &self.thickness, &self.skip, self.limit)
+            let topology = Topology::new(surface);
+            sample_thickness(
+                surface,
+                &topology,
+                distance,
+                &self.measured,
+                &self.skip,
+                self.limit,
+            )
         })
     }
 }
@@ -798,17 +821,19 @@ fn stuff_surface(
         max_memory: options.max_memory,
         min_dihedral_deg: options.min_dihedral_deg,
     };
+    // The mesh of the solid covers side 0 of the thickness, the shell side 1.
+    let covered = usize::from(sphere.is_some());
     if sphere.is_none() {
-        refuse_if_all_below_floor(&surveyed.sizing, &surveyed.thickness, &stuffing)?;
+        refuse_if_all_below_floor(&surveyed.sizing[0], &surveyed.thickness, &stuffing)?;
     }
     let bounds = surface.bounding_box().unwrap_or_default();
     // One meshing with the vertices' sizing or the sampled one, and `extra`
     // (refinements from earlier rounds), inside or in the shell.
     let stuff = |sampled: bool, extra: &[SizingFeature]| {
         let sizing = if sampled {
-            &surveyed.sampled(surface, distance).sizing
+            &surveyed.sampled(surface, distance, covered).sizing
         } else {
-            &surveyed.sizing
+            &surveyed.sizing[covered]
         };
         let inside = SurfaceInside {
             distance,
@@ -830,7 +855,7 @@ fn stuff_surface(
         warnings,
     )?;
     let samples = if meshed.sampled {
-        let sampled = surveyed.sampled(surface, distance);
+        let sampled = surveyed.sampled(surface, distance, covered);
         if sampled.bound {
             warnings.push(format!(
                 "the thickness sampled over the triangles stopped at {} points (the bound is {MAX_SAMPLES}): the triangles left are sized by their corners",

@@ -1,9 +1,13 @@
 //! What the volume stage measures on a surface for the mesher: at every vertex the
 //! thickness of the solid and the width of the gap in front of it ([`thickness`]: a ray
-//! along the normal, then the inscribed ball touching there), the sizing features that
-//! ask for finer cells where either is below `2h` ([`thin_part_sizing`]), and the
-//! creases and corners to snap onto ([`sharp_features`]). Folds of the surface and
-//! places where it crosses itself are not parts, and are skipped.
+//! along the normal, then the inscribed ball touching there), and at the middle of
+//! every face that turns away from its corners' normals (a hole's wall drawn with its
+//! rim's vertices alone: [`measure_surface`]), more points where those do not tell
+//! ([`sample_thickness`]), the sizing features that ask for finer cells where either is
+//! below `2h` ([`thin_part_sizing`]; two cells across, one across a thin part of the
+//! solid for the shell's mesh), and the creases and corners to snap onto
+//! ([`sharp_features`]). Folds of the surface and places where it crosses itself are
+//! not parts, and are skipped.
 //!
 //! Conventions: lengths in the surface's units; thickness `[solid, gap]` per vertex,
 //! infinite where not thin.
@@ -16,11 +20,20 @@ use crate::mesh::{SurfaceMesh, Topology};
 /// Parts and gaps thinner than this many `h` get finer cells (at `h`, two cells across).
 pub(super) const THIN_FACTOR: f64 = 2.0;
 
-/// Cells across a thin part or gap. Warping moves a vertex by at most 0.36 of a cell,
-/// so two cells across leave a core of more than a cell whose lattice vertices stay
-/// inside and connect along the part. (Where that is not enough, the topology check
-/// finds it and refines.)
+/// Cells across a thin part or gap on the side a mesh covers (a plate, for the mesh of
+/// the solid). Warping moves a vertex by at most 0.36 of a cell, so two cells across
+/// leave a core of more than a cell whose lattice vertices stay inside and connect
+/// along the part. (Where that is not enough, the topology check finds it and refines.)
 pub(super) const CELLS_ACROSS: f64 = 2.0;
+
+/// Cells across a thin part of the solid for the mesh of the gap around it (the
+/// shell): that mesh needs no interior vertex in the part, only a lattice vertex inside
+/// it between its walls so that its edges do not bridge them, and one cell across puts
+/// one there on most of the part. (Where it does not, the topology check finds the
+/// bridge and refines.) The mesh of the solid keeps [`CELLS_ACROSS`] across gaps: at
+/// one, os_cow-low-resolution lost its handle class, the junction where its tail meets
+/// its leg being sized by the gap beside it.
+pub(super) const CELLS_ACROSS_BEYOND: f64 = 1.0;
 
 /// A contact of the inscribed ball counts as the opposite wall (not the surface curving
 /// next to the vertex) when it is at least this angle round the ball from the vertex.
@@ -63,56 +76,123 @@ pub(super) fn thickness(
     (0..surface.num_vertices())
         .into_par_iter()
         .map(|v| {
-            let faces = topology.vertex_faces(v);
-            if faces.is_empty() || skip[v] || normals[v] == [0.0; 3] {
+            if topology.vertex_faces(v).is_empty() || skip[v] || normals[v] == [0.0; 3] {
                 return [f64::INFINITY; 2];
             }
+            let corner = [v as u32];
+            let at = Home::on(&corner, &shortest);
             let p = surface.positions[v];
-            let v32 = v as u32;
-            let far = |face: u32| {
-                surface
-                    .triangles
-                    .get(face as usize)
-                    .is_some_and(|t| !t.contains(&v32))
-            };
-            let ring = ring_of(surface, faces.iter().copied());
-            let beside = |face: u32| touches(surface, face, &ring);
-            let walls = Walls {
-                far: &far,
-                beside: &beside,
-            };
-            measure(surface, distance, p, normals[v], shortest[v], limit, &walls)
+            measure(surface, topology, distance, p, normals[v], limit, &at)
         })
         .collect()
 }
 
-/// The corners of `faces`, sorted, without repeats (a vertex's ring with the vertex).
-fn ring_of(surface: &SurfaceMesh, faces: impl Iterator<Item = u32>) -> Vec<u32> {
-    let mut ring: Vec<u32> = faces
-        .filter_map(|f| surface.triangles.get(f as usize))
-        .flatten()
-        .copied()
+/// A face turns away from each of its corners' normals by more than this: its corners
+/// look across elsewhere, and its middle is measured along its own normal.
+const OBLIQUE_DEG: f64 = 30.0;
+
+/// The thickness at vertices and at the middles of the faces their normals do not see
+/// ([`thickness`], then [`oblique_faces`] measured along their own normals): a hole
+/// through a plate drawn with its rim's vertices alone has corners whose normals lean
+/// halfway between the plate's face and the hole's wall, and rays along them leave
+/// through the hole's openings, so no vertex measures the hole's width. The middles
+/// are points on no triangle (sized on their own where thin); the triangles are the
+/// surface's.
+pub(super) fn measure_surface(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    distance: &SurfaceDistance,
+    skip: &[bool],
+    limit: f64,
+) -> ThicknessSamples {
+    use rayon::prelude::*;
+    let mut samples = ThicknessSamples {
+        positions: surface.positions.clone(),
+        normals: vertex_normals(surface),
+        thickness: thickness(surface, topology, distance, skip, limit),
+        triangles: surface.triangles.clone(),
+        bound: false,
+    };
+    let oblique = oblique_faces(surface, &samples.normals, skip);
+    let shortest = shortest_edges(surface);
+    let measured: Vec<([f64; 3], [f64; 3], [f64; 2])> = oblique
+        .par_iter()
+        .map(|&f| {
+            let corners = surface.triangles[f as usize];
+            let p = surface.corners(f as usize);
+            let middle = scale(add(add(p[0], p[1]), p[2]), 1.0 / 3.0);
+            let normal = unit(surface.face_normal_scaled(f as usize));
+            let at = Home::on(&corners, &shortest);
+            let t = measure(surface, topology, distance, middle, normal, limit, &at);
+            (middle, normal, t)
+        })
         .collect();
-    ring.sort_unstable();
-    ring.dedup();
-    ring
+    for (middle, normal, t) in measured {
+        samples.positions.push(middle);
+        samples.normals.push(normal);
+        samples.thickness.push(t);
+    }
+    samples
 }
 
-/// Whether `face` has a corner in the sorted `ring`.
-fn touches(surface: &SurfaceMesh, face: u32, ring: &[u32]) -> bool {
-    surface
-        .triangles
-        .get(face as usize)
-        .is_some_and(|t| t.iter().any(|v| ring.binary_search(v).is_ok()))
+/// The faces (in order) that turn away from each of their corners' `normals` by more
+/// than [`OBLIQUE_DEG`], but those with a `skip` corner.
+fn oblique_faces(surface: &SurfaceMesh, normals: &[[f64; 3]], skip: &[bool]) -> Vec<u32> {
+    let min_cos = OBLIQUE_DEG.to_radians().cos();
+    (0..surface.num_triangles())
+        .filter(|&f| {
+            let n = unit(surface.face_normal_scaled(f));
+            let corners = surface.triangles[f];
+            n != [0.0; 3]
+                && corners
+                    .iter()
+                    .all(|&v| !skip[v as usize] && dot(n, normals[v as usize]) < min_cos)
+        })
+        .map(|f| f as u32)
+        .collect()
 }
 
-/// Which triangles can be the other wall of a part at a point, for [`measure`].
-struct Walls<'a> {
-    /// Not at the point (a contact or hit on the point's own triangles does not count).
-    far: &'a dyn Fn(u32) -> bool,
-    /// Beside the point's own triangles: a wall there closer than 1/[`FOLD_RATIO`] of
-    /// the shortest edge is a fold.
-    beside: &'a dyn Fn(u32) -> bool,
+/// Where a point measured lies: on the surface's triangles round `corners` (a vertex,
+/// or the corners of the triangle a point lies on), whose shortest edge is `shortest`.
+struct Home<'a> {
+    corners: &'a [u32],
+    shortest: f64,
+}
+
+impl<'a> Home<'a> {
+    /// At `corners`, with the shortest of their edges (`shortest_edge`: per vertex, from
+    /// [`shortest_edges`]).
+    fn on(corners: &'a [u32], shortest_edge: &[f64]) -> Home<'a> {
+        let shortest = corners
+            .iter()
+            .map(|&v| shortest_edge[v as usize])
+            .fold(f64::INFINITY, f64::min);
+        Home { corners, shortest }
+    }
+
+    /// Whether `face` is not at the point: it has none of the corners (a contact or
+    /// hit on the point's own triangles does not count).
+    fn far(&self, surface: &SurfaceMesh, face: u32) -> bool {
+        surface
+            .triangles
+            .get(face as usize)
+            .is_some_and(|t| !t.iter().any(|v| self.corners.contains(v)))
+    }
+
+    /// Whether `face` lies beside the point's own triangles: one of its corners shares
+    /// a triangle with one of the point's corners. A wall there closer than
+    /// 1/[`FOLD_RATIO`] of the shortest edge is a fold.
+    fn beside(&self, surface: &SurfaceMesh, topology: &Topology, face: u32) -> bool {
+        surface.triangles.get(face as usize).is_some_and(|t| {
+            t.iter().any(|&c| {
+                topology.vertex_faces(c as usize).iter().any(|&g| {
+                    surface.triangles[g as usize]
+                        .iter()
+                        .any(|v| self.corners.contains(v))
+                })
+            })
+        })
+    }
 }
 
 /// The shortest edge at each vertex (infinite at a vertex on no triangle): a wall much
@@ -134,23 +214,23 @@ fn shortest_edges(surface: &SurfaceMesh) -> Vec<f64> {
 /// The thickness of the solid behind the surface point `p` and the width of the gap in
 /// front of it (`normal`: the unit outward normal there), each when below `limit`, else
 /// infinity. On each side a ray along the normal looks for the other wall within
-/// `limit`; where it finds one on a triangle far from `p` (`walls`) that faces it
-/// ([`faces_ray`]), the thickness is the
+/// `limit`; where it finds one on a triangle far from `p` (`at`: [`Home::far`]) that
+/// faces it ([`faces_ray`]), the thickness is the
 /// diameter of the largest ball touching the surface at `p` whose other contact lies
 /// across the part (shrinking-ball medial distance, started from the ray's chord), or
-/// the chord where no ball tells. A thickness below 1/[`FOLD_RATIO`] of `shortest`
-/// across to a triangle beside `p`'s own is a fold of the surface, not a part
-/// (infinity).
+/// the chord where no ball tells. A thickness below 1/[`FOLD_RATIO`] of the shortest
+/// edge at `p` across to a triangle beside `p`'s own ([`Home::beside`]) is a fold of
+/// the surface, not a part (infinity).
 fn measure(
     surface: &SurfaceMesh,
+    topology: &Topology,
     distance: &SurfaceDistance,
     p: [f64; 3],
     normal: [f64; 3],
-    shortest: f64,
     limit: f64,
-    walls: &Walls,
+    at: &Home,
 ) -> [f64; 2] {
-    let far = walls.far;
+    let far = |face: u32| at.far(surface, face);
     [-1.0, 1.0].map(|direction| {
         let d = scale(normal, direction);
         // A ray that meets no other wall within the limit leaves room for a ball of
@@ -163,9 +243,9 @@ fn measure(
         }
         // The ball's diameter is the thickness across a plate or a wire whatever the
         // normal (the ray's chord is only a bound on it).
-        let ball = 2.0 * medial_radius(distance, p, d, 0.5 * hit, far);
+        let ball = 2.0 * medial_radius(distance, p, d, 0.5 * hit, &far);
         let t = if ball.is_finite() { ball } else { hit };
-        let fold = t * FOLD_RATIO < shortest && (walls.beside)(face);
+        let fold = t * FOLD_RATIO < at.shortest && at.beside(surface, topology, face);
         if t < limit && !fold {
             t
         } else {
@@ -221,7 +301,8 @@ pub(super) struct ThicknessSamples {
     /// `[solid, gap]` at each point, infinite where not thin.
     pub thickness: Vec<[f64; 2]>,
     /// Triangles over the points, covering the surface's triangles (pieces of one
-    /// surface triangle need not share their edges' points with the next one's).
+    /// surface triangle need not share their edges' points with the next one's); a
+    /// point may lie on none (a face's middle, see [`measure_surface`]).
     pub triangles: Vec<[u32; 3]>,
     /// Whether [`MAX_SAMPLES`] stopped the splitting (pieces left that asked for more).
     pub bound: bool,
@@ -230,6 +311,7 @@ pub(super) struct ThicknessSamples {
 impl ThicknessSamples {
     /// The thickness at the surface's vertices alone (`thickness`: from [`thickness`]),
     /// over its triangles.
+    #[cfg(test)]
     pub fn at_vertices(surface: &SurfaceMesh, thickness: &[[f64; 2]]) -> ThicknessSamples {
         ThicknessSamples {
             positions: surface.positions.clone(),
@@ -252,7 +334,8 @@ pub(super) const MAX_SAMPLES: usize = 2_000_000;
 /// whole area.)
 pub(super) const FINEST_SAMPLE: f64 = 1.0 / 16.0;
 
-/// Sample the thickness over the surface where its vertices do not tell it: a triangle
+/// Sample the thickness over the surface where the points measured so far (`start`:
+/// from [`measure_surface`]) do not tell it: a triangle
 /// (or piece) is split in four, and the thickness measured at its edges' midpoints,
 /// while its longest edge exceeds `limit` (a thin part may pass between vertices that
 /// far apart), or while on either side its corners disagree (thin at one and not at
@@ -262,41 +345,37 @@ pub(super) const FINEST_SAMPLE: f64 = 1.0 / 16.0;
 /// reaching into the plate would otherwise ask for the rim's cells over those
 /// triangles' whole area. Triangles with a `skip` corner (crossings) are not split. A
 /// point added is a fold (not thin) where its thickness is below 1/[`FOLD_RATIO`] of
-/// the shortest edge at any corner of its triangle across to a triangle beside it (a
-/// corner on the corners' rings), as a vertex is against its own.
+/// the shortest edge at any corner of its surface triangle across to a triangle beside
+/// it ([`Home::beside`]), as a vertex is against its own.
 /// At most [`MAX_SAMPLES`] points are added (`bound` says when that stopped it).
 pub(super) fn sample_thickness(
     surface: &SurfaceMesh,
+    topology: &Topology,
     distance: &SurfaceDistance,
-    vertex_thickness: &[[f64; 2]],
+    start: &ThicknessSamples,
     skip: &[bool],
     limit: f64,
 ) -> ThicknessSamples {
     use rayon::prelude::*;
     use rustc_hash::FxHashMap;
     let shortest_edge = shortest_edges(surface);
-    let topology = Topology::new(surface);
     let mut samples = ThicknessSamples {
-        positions: surface.positions.clone(),
-        normals: vertex_normals(surface),
-        thickness: vertex_thickness.to_vec(),
         triangles: Vec::new(),
         bound: false,
+        ..start.clone()
     };
+    let crossing = |t: &[u32; 3]| t.iter().any(|&v| skip[v as usize]);
     // Pieces still to decide: corners and the surface triangle they lie on.
     let mut pieces: Vec<([u32; 3], u32)> = surface
         .triangles
         .iter()
         .enumerate()
-        .filter(|(_, t)| !t.iter().any(|&v| skip[v as usize]))
+        .filter(|(_, t)| !crossing(t))
         .map(|(f, &t)| (t, f as u32))
         .collect();
-    samples.triangles.extend(
-        surface
-            .triangles
-            .iter()
-            .filter(|t| t.iter().any(|&v| skip[v as usize])),
-    );
+    samples
+        .triangles
+        .extend(surface.triangles.iter().filter(|t| crossing(t)));
     while !pieces.is_empty() {
         let split: Vec<bool> = pieces
             .par_iter()
@@ -349,31 +428,10 @@ pub(super) fn sample_thickness(
         let measured: Vec<[f64; 2]> = (first_new..samples.positions.len())
             .into_par_iter()
             .map(|i| {
-                let home = surface.triangles[homes[i - first_new] as usize];
-                let shortest = home
-                    .iter()
-                    .map(|&v| shortest_edge[v as usize])
-                    .fold(f64::INFINITY, f64::min);
-                // A wall on a triangle sharing a corner with the home triangle is the
-                // surface turning there, not the other side of a part.
-                let far = |face: u32| {
-                    surface
-                        .triangles
-                        .get(face as usize)
-                        .is_some_and(|t| !t.iter().any(|v| home.contains(v)))
-                };
-                let ring = ring_of(
-                    surface,
-                    home.iter()
-                        .flat_map(|&v| topology.vertex_faces(v as usize).iter().copied()),
-                );
-                let beside = |face: u32| touches(surface, face, &ring);
-                let walls = Walls {
-                    far: &far,
-                    beside: &beside,
-                };
+                let corners = surface.triangles[homes[i - first_new] as usize];
+                let at = Home::on(&corners, &shortest_edge);
                 let (p, n) = (samples.positions[i], samples.normals[i]);
-                measure(surface, distance, p, n, shortest, limit, &walls)
+                measure(surface, topology, distance, p, n, limit, &at)
             })
             .collect();
         samples.thickness.extend(measured);
@@ -460,8 +518,10 @@ fn medial_radius(
 /// a thin region, alone, or thinner than its neighbours), a point with its own. Each
 /// faces its side and reaches half the thickness and one cell more: to the middle of the
 /// part or gap (the other wall's features reach the rest), and one cell out the other
-/// way. The octree's 2:1 balance grades the cells around them.
-pub(super) fn thin_part_sizing(samples: &ThicknessSamples) -> Vec<SizingFeature> {
+/// way. The octree's 2:1 balance grades the cells around them. A part or gap gets
+/// [`CELLS_ACROSS`] cells across, but a thin part of the solid for the mesh of the gap
+/// (`covered`: 0 for the mesh of the solid, 1 of the gap) [`CELLS_ACROSS_BEYOND`].
+pub(super) fn thin_part_sizing(samples: &ThicknessSamples, covered: usize) -> Vec<SizingFeature> {
     let ThicknessSamples {
         positions,
         normals,
@@ -472,8 +532,13 @@ pub(super) fn thin_part_sizing(samples: &ThicknessSamples) -> Vec<SizingFeature>
     let mut out = Vec::new();
     // Side 0 is the solid (against the outward normal), side 1 the gap.
     for (side, sign) in [(0, -1.0), (1, 1.0)] {
+        let across = if side == 0 && covered == 1 {
+            CELLS_ACROSS_BEYOND
+        } else {
+            CELLS_ACROSS
+        };
         let feature = |corners: [[f64; 3]; 3], t: f64, reach: f64, toward: [f64; 3]| {
-            let spacing = t / CELLS_ACROSS;
+            let spacing = t / across;
             SizingFeature {
                 corners,
                 spacing,
@@ -482,8 +547,8 @@ pub(super) fn thin_part_sizing(samples: &ThicknessSamples) -> Vec<SizingFeature>
             }
         };
         // Per point: the coarsest thickness a triangle over it was sized for (infinite
-        // when some triangle at it is not all thin).
-        let mut covered_by = vec![0.0f64; thickness.len()];
+        // when some triangle at it is not all thin, or none is).
+        let mut covered_by = vec![None::<f64>; thickness.len()];
         for tri in triangles {
             let mut t = tri.map(|v| thickness[v as usize][side]);
             let all_thin = t.iter().all(|x| x.is_finite());
@@ -491,7 +556,8 @@ pub(super) fn thin_part_sizing(samples: &ThicknessSamples) -> Vec<SizingFeature>
             // The middle corner: one outlier corner neither coarsens nor refines it.
             let sized = if all_thin { t[1] } else { f64::INFINITY };
             for &v in tri {
-                covered_by[v as usize] = covered_by[v as usize].max(sized);
+                let c = &mut covered_by[v as usize];
+                *c = Some(c.map_or(sized, |c| c.max(sized)));
             }
             if all_thin {
                 let corners = tri.map(|v| positions[v as usize]);
@@ -504,7 +570,8 @@ pub(super) fn thin_part_sizing(samples: &ThicknessSamples) -> Vec<SizingFeature>
         }
         for (v, t) in thickness.iter().enumerate() {
             let t = t[side];
-            if t.is_finite() && t * std::f64::consts::SQRT_2 < covered_by[v] {
+            let covered = covered_by[v].unwrap_or(f64::INFINITY);
+            if t.is_finite() && t * std::f64::consts::SQRT_2 < covered {
                 out.push(feature([positions[v]; 3], t, t, scale(normals[v], sign)));
             }
         }
@@ -616,7 +683,8 @@ mod tests {
         // Both the slab (1.5) and the flange (0.5) are thin below this limit.
         let limit = 2.0;
         let at_vertices = thickness(&plate, &topology, &distance, &skip, limit);
-        let samples = sample_thickness(&plate, &distance, &at_vertices, &skip, limit);
+        let start = ThicknessSamples::at_vertices(&plate, &at_vertices);
+        let samples = sample_thickness(&plate, &topology, &distance, &start, &skip, limit);
         assert!(samples.positions.len() > plate.num_vertices() && !samples.bound);
         // Every point measured on the flange's bottom or top, away from its edges,
         // has the solid 0.5 thick behind it; on the slab's bottom, 1.5.
@@ -635,7 +703,7 @@ mod tests {
         }
         assert!(on_flange > 20 && on_slab > 20, "{on_flange} {on_slab}");
         {
-            let features = thin_part_sizing(&samples);
+            let features = thin_part_sizing(&samples, 0);
             let flange = |f: &&SizingFeature| f.spacing * CELLS_ACROSS < 1.0;
             // The flange's cells stay on the flange: no feature that fine reaches
             // more than a sample's spacing (limit / 2) into the slab ...
@@ -659,8 +727,7 @@ mod tests {
         }
         // Sized by its corners alone, a bottom triangle with two corners on the
         // flange asks for the flange's cells over the slab too.
-        let corners_only = ThicknessSamples::at_vertices(&plate, &at_vertices);
-        let spread = thin_part_sizing(&corners_only)
+        let spread = thin_part_sizing(&start, 0)
             .iter()
             .filter(|f| f.spacing * CELLS_ACROSS < 1.0)
             .flat_map(|f| f.corners)
@@ -707,5 +774,117 @@ mod tests {
         assert!(!faces_ray(&block, top, [0.0, 0.0, -1.0], -1.0));
         assert!(faces_ray(&block, top, [0.0, 0.0, -1.0], 1.0));
         assert!(!faces_ray(&block, top, [1.0, 0.0, 0.01], -1.0));
+    }
+
+    /// A square plate 20 × 20 × 3.2 with an octagonal hole of circumradius 1.9 through
+    /// its middle, drawn with the hole's rim vertices alone (each wall of the hole two
+    /// triangles from top to bottom, the top and bottom rings of quads out to eight
+    /// points on the plate's edge), as a CAD export draws a drilled hole.
+    fn plate_with_a_drilled_hole() -> SurfaceMesh {
+        let (n, r, half, t) = (8usize, 1.9, 10.0, 3.2);
+        let mut positions = Vec::new();
+        // Per angle k: the rim's bottom and top, the edge's bottom and top.
+        for k in 0..n {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            let (c, s) = (a.cos(), a.sin());
+            let edge = half / c.abs().max(s.abs());
+            for (radius, z) in [(r, 0.0), (r, t), (edge, 0.0), (edge, t)] {
+                positions.push([radius * c, radius * s, z]);
+            }
+        }
+        let at = |k: usize, which: u32| (4 * (k % n)) as u32 + which;
+        // Quads, each with the direction its outward normal should point along.
+        let mut quads = Vec::new();
+        for k in 0..n {
+            let [ib, it, ob, ot] = [0, 1, 2, 3];
+            let middle = std::f64::consts::TAU * (k as f64 + 0.5) / n as f64;
+            let radial = [middle.cos(), middle.sin(), 0.0];
+            quads.push((
+                [at(k, it), at(k + 1, it), at(k + 1, ot), at(k, ot)],
+                [0.0, 0.0, 1.0],
+            ));
+            quads.push((
+                [at(k, ib), at(k + 1, ib), at(k + 1, ob), at(k, ob)],
+                [0.0, 0.0, -1.0],
+            ));
+            quads.push((
+                [at(k, ib), at(k + 1, ib), at(k + 1, it), at(k, it)],
+                scale(radial, -1.0),
+            ));
+            quads.push(([at(k, ob), at(k + 1, ob), at(k + 1, ot), at(k, ot)], radial));
+        }
+        let mut triangles = Vec::new();
+        for ([a, b, c, d], toward) in quads {
+            for mut tri in [[a, b, c], [a, c, d]] {
+                let p = tri.map(|v| positions[v as usize]);
+                let normal = crate::geom::cross(sub(p[1], p[0]), sub(p[2], p[0]));
+                if dot(normal, toward) < 0.0 {
+                    tri.swap(1, 2);
+                }
+                triangles.push(tri);
+            }
+        }
+        SurfaceMesh::new(positions, triangles).unwrap()
+    }
+
+    #[test]
+    fn a_hole_drawn_with_its_rim_alone_is_measured_on_its_walls() {
+        let plate = plate_with_a_drilled_hole();
+        let (r, t) = (1.9, 3.2);
+        let apothem = r * (std::f64::consts::PI / 8.0).cos();
+        let octagon = 0.5 * 8.0 * r * r * (std::f64::consts::TAU / 8.0).sin();
+        assert!((plate.signed_volume() - (400.0 - octagon) * t).abs() < 1e-9);
+        let topology = Topology::new(&plate);
+        let distance = SurfaceDistance::new(&plate);
+        let skip = vec![false; plate.num_vertices()];
+        let limit = 10.0;
+        let samples = measure_surface(&plate, &topology, &distance, &skip, limit);
+        // The rim's vertex normals lean halfway out of the hole: no vertex sees it.
+        let on_rim = |p: [f64; 3]| (norm([p[0], p[1], 0.0]) - r).abs() < 1e-9;
+        for (p, th) in samples.positions.iter().zip(&samples.thickness) {
+            if on_rim(*p) {
+                assert!(th[1].is_infinite(), "{p:?}: {th:?}");
+            }
+        }
+        // The middle of every wall of the hole measures the width across it.
+        let n = plate.num_vertices();
+        let mut walls = 0;
+        for (p, th) in samples.positions[n..].iter().zip(&samples.thickness[n..]) {
+            if norm([p[0], p[1], 0.0]) < r {
+                assert!((th[1] - 2.0 * apothem).abs() < 1e-9, "{p:?}: {th:?}");
+                walls += 1;
+            }
+        }
+        assert_eq!(walls, 16);
+        // The middles lie on no triangle: the triangles are the surface's.
+        assert_eq!(samples.triangles, plate.triangles);
+        // The gap's mesh and the solid's get cells of half the width in the hole.
+        for covered in [0, 1] {
+            let hole = thin_part_sizing(&samples, covered)
+                .into_iter()
+                // Facing the hole's axis: into the gap.
+                .filter(|f| f.toward[2] == 0.0 && dot(f.toward, f.corners[0]) < 0.0)
+                .filter(|f| f.corners.iter().all(|c| norm([c[0], c[1], 0.0]) < r + 1e-9))
+                .map(|f| f.spacing)
+                .fold(f64::INFINITY, f64::min);
+            assert!((hole - apothem).abs() < 1e-9, "{hole}");
+        }
+        // The gap's mesh takes the plate at one cell across, the solid's at two; the
+        // features are made in the same order for both.
+        let (solid, gap) = (thin_part_sizing(&samples, 0), thin_part_sizing(&samples, 1));
+        assert_eq!(solid.len(), gap.len());
+        let ratios: Vec<f64> = gap
+            .iter()
+            .zip(&solid)
+            .map(|(g, s)| g.spacing / s.spacing)
+            .collect();
+        let coarser = CELLS_ACROSS / CELLS_ACROSS_BEYOND;
+        assert!(
+            ratios
+                .iter()
+                .all(|&r| r == 1.0 || (r - coarser).abs() < 1e-12),
+            "{ratios:?}"
+        );
+        assert!(ratios.contains(&1.0) && ratios.iter().any(|&r| r > 1.0));
     }
 }
