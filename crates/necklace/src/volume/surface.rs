@@ -733,7 +733,7 @@ fn size_surface(
         })
         .collect();
     let sizing = [0, 1].map(|covered| {
-        let mut sizing = thin_part_sizing(&measured, covered);
+        let mut sizing = thin_part_sizing(&measured, covered, h);
         sizing.extend(&crossing_sizing);
         sizing
     });
@@ -773,7 +773,7 @@ impl SurfaceSizing {
     ) -> &SampledSizing {
         self.sampled[covered].get_or_init(|| {
             let samples = self.samples(surface, distance);
-            let mut sizing = thin_part_sizing(samples, covered);
+            let mut sizing = thin_part_sizing(samples, covered, self.limit / THIN_FACTOR);
             sizing.extend(&self.crossing_sizing);
             SampledSizing {
                 sizing,

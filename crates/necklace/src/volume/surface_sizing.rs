@@ -5,7 +5,7 @@
 //! rim's vertices alone: [`measure_surface`]), more points where those do not tell
 //! ([`sample_thickness`]), the sizing features that ask for finer cells where either is
 //! below `2h` ([`thin_part_sizing`]; two cells across, one across a thin part of the
-//! solid for the shell's mesh), and the creases and corners to snap onto
+//! solid, at most `h / 2`, for the shell's mesh), and the creases and corners to snap onto
 //! ([`sharp_features`]). Folds of the surface and places where it crosses itself are
 //! not parts, and are skipped.
 //!
@@ -30,9 +30,11 @@ pub(super) const CELLS_ACROSS: f64 = 2.0;
 /// shell): that mesh needs no interior vertex in the part, only a lattice vertex inside
 /// it between its walls so that its edges do not bridge them, and one cell across puts
 /// one there on most of the part. (Where it does not, the topology check finds the
-/// bridge and refines.) The mesh of the solid keeps [`CELLS_ACROSS`] across gaps: at
-/// one, os_cow-low-resolution lost its handle class, the junction where its tail meets
-/// its leg being sized by the gap beside it.
+/// bridge and refines.) The cells stay at most `h / 2` there, one level below the
+/// lattice's: at `h`, the buckyball's shell (sticks 0.2 thick, h 0.145) lost one
+/// window's loop, its saddle's plane cutting no curve round it. The mesh of the solid
+/// keeps [`CELLS_ACROSS`] across gaps: at one, os_cow-low-resolution lost its handle
+/// class, the junction where its tail meets its leg being sized by the gap beside it.
 pub(super) const CELLS_ACROSS_BEYOND: f64 = 1.0;
 
 /// A contact of the inscribed ball counts as the opposite wall (not the surface curving
@@ -520,8 +522,13 @@ fn medial_radius(
 /// part or gap (the other wall's features reach the rest), and one cell out the other
 /// way. The octree's 2:1 balance grades the cells around them. A part or gap gets
 /// [`CELLS_ACROSS`] cells across, but a thin part of the solid for the mesh of the gap
-/// (`covered`: 0 for the mesh of the solid, 1 of the gap) [`CELLS_ACROSS_BEYOND`].
-pub(super) fn thin_part_sizing(samples: &ThicknessSamples, covered: usize) -> Vec<SizingFeature> {
+/// (`covered`: 0 for the mesh of the solid, 1 of the gap) [`CELLS_ACROSS_BEYOND`], and
+/// no coarser than `h / 2` (see there).
+pub(super) fn thin_part_sizing(
+    samples: &ThicknessSamples,
+    covered: usize,
+    h: f64,
+) -> Vec<SizingFeature> {
     let ThicknessSamples {
         positions,
         normals,
@@ -532,13 +539,13 @@ pub(super) fn thin_part_sizing(samples: &ThicknessSamples, covered: usize) -> Ve
     let mut out = Vec::new();
     // Side 0 is the solid (against the outward normal), side 1 the gap.
     for (side, sign) in [(0, -1.0), (1, 1.0)] {
-        let across = if side == 0 && covered == 1 {
-            CELLS_ACROSS_BEYOND
-        } else {
-            CELLS_ACROSS
-        };
+        let beyond = side == 0 && covered == 1;
         let feature = |corners: [[f64; 3]; 3], t: f64, reach: f64, toward: [f64; 3]| {
-            let spacing = t / across;
+            let spacing = if beyond {
+                (t / CELLS_ACROSS_BEYOND).min(0.5 * h)
+            } else {
+                t / CELLS_ACROSS
+            };
             SizingFeature {
                 corners,
                 spacing,
@@ -703,7 +710,7 @@ mod tests {
         }
         assert!(on_flange > 20 && on_slab > 20, "{on_flange} {on_slab}");
         {
-            let features = thin_part_sizing(&samples, 0);
+            let features = thin_part_sizing(&samples, 0, 0.5 * limit);
             let flange = |f: &&SizingFeature| f.spacing * CELLS_ACROSS < 1.0;
             // The flange's cells stay on the flange: no feature that fine reaches
             // more than a sample's spacing (limit / 2) into the slab ...
@@ -727,7 +734,7 @@ mod tests {
         }
         // Sized by its corners alone, a bottom triangle with two corners on the
         // flange asks for the flange's cells over the slab too.
-        let spread = thin_part_sizing(&start, 0)
+        let spread = thin_part_sizing(&start, 0, 0.5 * limit)
             .iter()
             .filter(|f| f.spacing * CELLS_ACROSS < 1.0)
             .flat_map(|f| f.corners)
@@ -860,7 +867,7 @@ mod tests {
         assert_eq!(samples.triangles, plate.triangles);
         // The gap's mesh and the solid's get cells of half the width in the hole.
         for covered in [0, 1] {
-            let hole = thin_part_sizing(&samples, covered)
+            let hole = thin_part_sizing(&samples, covered, 0.5 * limit)
                 .into_iter()
                 // Facing the hole's axis: into the gap.
                 .filter(|f| f.toward[2] == 0.0 && dot(f.toward, f.corners[0]) < 0.0)
@@ -871,20 +878,20 @@ mod tests {
         }
         // The gap's mesh takes the plate at one cell across, the solid's at two; the
         // features are made in the same order for both.
-        let (solid, gap) = (thin_part_sizing(&samples, 0), thin_part_sizing(&samples, 1));
+        let h = 0.5 * limit;
+        let solid = thin_part_sizing(&samples, 0, h);
+        let gap = thin_part_sizing(&samples, 1, h);
         assert_eq!(solid.len(), gap.len());
-        let ratios: Vec<f64> = gap
-            .iter()
-            .zip(&solid)
-            .map(|(g, s)| g.spacing / s.spacing)
-            .collect();
         let coarser = CELLS_ACROSS / CELLS_ACROSS_BEYOND;
-        assert!(
-            ratios
-                .iter()
-                .all(|&r| r == 1.0 || (r - coarser).abs() < 1e-12),
-            "{ratios:?}"
-        );
-        assert!(ratios.contains(&1.0) && ratios.iter().any(|&r| r > 1.0));
+        let (mut same, mut coarse) = (0, 0);
+        for (g, s) in gap.iter().zip(&solid) {
+            if g.spacing == s.spacing {
+                same += 1;
+            } else {
+                assert_eq!(g.spacing, (coarser * s.spacing).min(0.5 * h), "{g:?} {s:?}");
+                coarse += 1;
+            }
+        }
+        assert!(same > 0 && coarse > 0, "{same} {coarse}");
     }
 }
