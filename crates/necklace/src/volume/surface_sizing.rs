@@ -32,7 +32,9 @@ pub(super) const CELLS_ACROSS: f64 = 2.0;
 /// one there on most of the part. (Where it does not, the topology check finds the
 /// bridge and refines.) The cells stay at most `h / 2` there, one level below the
 /// lattice's: at `h`, the buckyball's shell (sticks 0.2 thick, h 0.145) lost one
-/// window's loop, its saddle's plane cutting no curve round it. The mesh of the solid
+/// window's loop, its saddle's plane cutting no curve round it. (A part thicker than
+/// `h` keeps its two cells across, at least `h / 2` each: no finer than in the solid's
+/// mesh.) The mesh of the solid
 /// keeps [`CELLS_ACROSS`] across gaps: at one, os_cow-low-resolution lost its handle
 /// class, the junction where its tail meets its leg being sized by the gap beside it.
 pub(super) const CELLS_ACROSS_BEYOND: f64 = 1.0;
@@ -522,8 +524,8 @@ fn medial_radius(
 /// part or gap (the other wall's features reach the rest), and one cell out the other
 /// way. The octree's 2:1 balance grades the cells around them. A part or gap gets
 /// [`CELLS_ACROSS`] cells across, but a thin part of the solid for the mesh of the gap
-/// (`covered`: 0 for the mesh of the solid, 1 of the gap) [`CELLS_ACROSS_BEYOND`], and
-/// no coarser than `h / 2` (see there).
+/// (`covered`: 0 for the mesh of the solid, 1 of the gap) [`CELLS_ACROSS_BEYOND`], no
+/// coarser than `h / 2` and no finer than at [`CELLS_ACROSS`] (see there).
 pub(super) fn thin_part_sizing(
     samples: &ThicknessSamples,
     covered: usize,
@@ -542,7 +544,7 @@ pub(super) fn thin_part_sizing(
         let beyond = side == 0 && covered == 1;
         let feature = |corners: [[f64; 3]; 3], t: f64, reach: f64, toward: [f64; 3]| {
             let spacing = if beyond {
-                (t / CELLS_ACROSS_BEYOND).min(0.5 * h)
+                (t / CELLS_ACROSS_BEYOND).min(0.5 * h).max(t / CELLS_ACROSS)
             } else {
                 t / CELLS_ACROSS
             };
@@ -888,7 +890,8 @@ mod tests {
             if g.spacing == s.spacing {
                 same += 1;
             } else {
-                assert_eq!(g.spacing, (coarser * s.spacing).min(0.5 * h), "{g:?} {s:?}");
+                let bounded = (coarser * s.spacing).min(0.5 * h).max(s.spacing);
+                assert_eq!(g.spacing, bounded, "{g:?} {s:?}");
                 coarse += 1;
             }
         }
