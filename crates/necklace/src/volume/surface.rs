@@ -365,9 +365,8 @@ pub struct SurfaceSurvey {
 /// The stuffing mesher's part of a [`SurfaceSurvey`].
 #[derive(Debug, Clone)]
 struct SurfaceSizing {
-    /// Per vertex, the thickness of the solid and the width of the gap (infinite where
-    /// not thin).
-    thickness: Vec<[f64; 2]>,
+    /// The lattice spacing the thickness was measured for (thin below `THIN_FACTOR` × h).
+    h: f64,
     /// The thickness at the vertices and at the faces they do not see
     /// ([`measure_surface`]): where [`sample_thickness`] starts.
     measured: ThicknessSamples,
@@ -380,8 +379,6 @@ struct SurfaceSizing {
     crossing_sizing: Vec<SizingFeature>,
     /// Vertices whose thickness is not measured (at crossings).
     skip: Vec<bool>,
-    /// The thickness limit (`THIN_FACTOR` × h).
-    limit: f64,
     /// The sizing by the thickness sampled over the triangles too, for each side as
     /// `sizing`: made the first time the side asks (its vertices' sizing gave another
     /// topology).
@@ -391,6 +388,8 @@ struct SurfaceSizing {
     samples: std::sync::OnceLock<ThicknessSamples>,
     /// Creases, corners and the crossing curve to snap onto.
     features: SharpFeatures,
+    /// The surface's adjacency, for sampling.
+    topology: Topology,
 }
 
 /// Survey a closed, outward-oriented surface for meshing its sides with `options`
@@ -430,7 +429,7 @@ pub fn survey_surface(
         Mesher::Tetgen => None,
     };
     let thin_vertices = sizing.as_ref().map_or(0, |s| {
-        s.thickness
+        s.thickness()
             .iter()
             .filter(|t| t.iter().any(|x| x.is_finite()))
             .count()
@@ -702,8 +701,7 @@ fn size_surface(
     }
     let topology = Topology::new(surface);
     let measured = measure_surface(surface, &topology, distance, &crossing, THIN_FACTOR * h);
-    let thickness = measured.thickness[..surface.num_vertices()].to_vec();
-    let spacing: Vec<f64> = thickness
+    let spacing: Vec<f64> = measured.thickness[..surface.num_vertices()]
         .iter()
         .map(|t| (t[0].min(t[1]) / CELLS_ACROSS).min(h))
         .collect();
@@ -738,16 +736,16 @@ fn size_surface(
         sizing
     });
     SurfaceSizing {
+        h,
         sizing,
         crossing_sizing,
         skip: crossing,
-        limit: THIN_FACTOR * h,
         sampled: Default::default(),
         samples: std::sync::OnceLock::new(),
         measured,
-        thickness,
         spacing,
         features,
+        topology,
     }
 }
 
@@ -763,6 +761,12 @@ struct SampledSizing {
 }
 
 impl SurfaceSizing {
+    /// Per surface vertex, the thickness of the solid and the width of the gap (infinite
+    /// where not thin).
+    fn thickness(&self) -> &[[f64; 2]] {
+        &self.measured.thickness[..self.spacing.len()]
+    }
+
     /// The sizing by the thickness sampled over the triangles for the mesh of the solid
     /// (`covered` 0) or the gap (1), made on the first call.
     fn sampled(
@@ -773,7 +777,7 @@ impl SurfaceSizing {
     ) -> &SampledSizing {
         self.sampled[covered].get_or_init(|| {
             let samples = self.samples(surface, distance);
-            let mut sizing = thin_part_sizing(samples, covered, self.limit / THIN_FACTOR);
+            let mut sizing = thin_part_sizing(samples, covered, self.h);
             sizing.extend(&self.crossing_sizing);
             SampledSizing {
                 sizing,
@@ -786,14 +790,13 @@ impl SurfaceSizing {
     /// The thickness sampled over the triangles, made on the first call.
     fn samples(&self, surface: &SurfaceMesh, distance: &SurfaceDistance) -> &ThicknessSamples {
         self.samples.get_or_init(|| {
-            let topology = Topology::new(surface);
             sample_thickness(
                 surface,
-                &topology,
+                &self.topology,
                 distance,
                 &self.measured,
                 &self.skip,
-                self.limit,
+                THIN_FACTOR * self.h,
             )
         })
     }
@@ -824,7 +827,7 @@ fn stuff_surface(
     // The mesh of the solid covers side 0 of the thickness, the shell side 1.
     let covered = usize::from(sphere.is_some());
     if sphere.is_none() {
-        refuse_if_all_below_floor(&surveyed.sizing[0], &surveyed.thickness, &stuffing)?;
+        refuse_if_all_below_floor(&surveyed.sizing[0], surveyed.thickness(), &stuffing)?;
     }
     let bounds = surface.bounding_box().unwrap_or_default();
     // One meshing with the vertices' sizing or the sampled one, and `extra`

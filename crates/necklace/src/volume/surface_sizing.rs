@@ -1,5 +1,5 @@
 //! What the volume stage measures on a surface for the mesher: at every vertex the
-//! thickness of the solid and the width of the gap in front of it ([`thickness`]: a ray
+//! thickness of the solid and the width of the gap in front of it ([`thickness_along`]: a ray
 //! along the normal, then the inscribed ball touching there), and at the middle of
 //! every face that turns away from its corners' normals (a hole's wall drawn with its
 //! rim's vertices alone: [`measure_surface`]), more points where those do not tell
@@ -62,21 +62,37 @@ const MAX_INCIDENCE_DEG: f64 = 80.0;
 /// a ball still shrinking after them is taken as not thin.
 const MEDIAL_STEPS: usize = 8;
 
-/// For each surface vertex (but those marked `skip`), the thickness of the solid and the
-/// width of the gap in front of it, each when below `limit` (else infinity), by
-/// [`measure`] along the vertex normal. A contact or hit on a triangle at the vertex
-/// does not count, nor a thickness below 1/[`FOLD_RATIO`] of the vertex's shortest edge
-/// across to a triangle beside the vertex's own (a fold, not a part).
-pub(super) fn thickness(
+/// [`thickness_along`] the vertex normals.
+#[cfg(test)]
+fn thickness(
     surface: &SurfaceMesh,
     topology: &Topology,
     distance: &SurfaceDistance,
     skip: &[bool],
     limit: f64,
 ) -> Vec<[f64; 2]> {
+    let (normals, shortest) = (vertex_normals(surface), shortest_edges(surface));
+    thickness_along(
+        surface, topology, distance, skip, limit, &normals, &shortest,
+    )
+}
+
+/// For each surface vertex (but those marked `skip`), the thickness of the solid and the
+/// width of the gap in front of it, each when below `limit` (else infinity), by
+/// [`measure`] along the vertex normal (`normals`: from [`vertex_normals`]). A contact
+/// or hit on a triangle at the vertex does not count, nor a thickness below
+/// 1/[`FOLD_RATIO`] of the vertex's shortest edge (`shortest`: from [`shortest_edges`])
+/// across to a triangle beside the vertex's own (a fold, not a part).
+fn thickness_along(
+    surface: &SurfaceMesh,
+    topology: &Topology,
+    distance: &SurfaceDistance,
+    skip: &[bool],
+    limit: f64,
+    normals: &[[f64; 3]],
+    shortest: &[f64],
+) -> Vec<[f64; 2]> {
     use rayon::prelude::*;
-    let normals = vertex_normals(surface);
-    let shortest = shortest_edges(surface);
     (0..surface.num_vertices())
         .into_par_iter()
         .map(|v| {
@@ -84,7 +100,7 @@ pub(super) fn thickness(
                 return [f64::INFINITY; 2];
             }
             let corner = [v as u32];
-            let at = Home::on(&corner, &shortest);
+            let at = Home::on(&corner, shortest);
             let p = surface.positions[v];
             measure(surface, topology, distance, p, normals[v], limit, &at)
         })
@@ -96,7 +112,7 @@ pub(super) fn thickness(
 const OBLIQUE_DEG: f64 = 30.0;
 
 /// The thickness at vertices and at the middles of the faces their normals do not see
-/// ([`thickness`], then [`oblique_faces`] measured along their own normals): a hole
+/// ([`thickness_along`], then [`oblique_faces`] measured along their own normals): a hole
 /// through a plate drawn with its rim's vertices alone has corners whose normals lean
 /// halfway between the plate's face and the hole's wall, and rays along them leave
 /// through the hole's openings, so no vertex measures the hole's width. The middles
@@ -110,15 +126,18 @@ pub(super) fn measure_surface(
     limit: f64,
 ) -> ThicknessSamples {
     use rayon::prelude::*;
+    let (normals, shortest) = (vertex_normals(surface), shortest_edges(surface));
+    let thickness = thickness_along(
+        surface, topology, distance, skip, limit, &normals, &shortest,
+    );
+    let oblique = oblique_faces(surface, &normals, skip);
     let mut samples = ThicknessSamples {
         positions: surface.positions.clone(),
-        normals: vertex_normals(surface),
-        thickness: thickness(surface, topology, distance, skip, limit),
+        normals,
+        thickness,
         triangles: surface.triangles.clone(),
         bound: false,
     };
-    let oblique = oblique_faces(surface, &samples.normals, skip);
-    let shortest = shortest_edges(surface);
     let measured: Vec<([f64; 3], [f64; 3], [f64; 2])> = oblique
         .par_iter()
         .map(|&f| {
@@ -313,7 +332,7 @@ pub(super) struct ThicknessSamples {
 }
 
 impl ThicknessSamples {
-    /// The thickness at the surface's vertices alone (`thickness`: from [`thickness`]),
+    /// The thickness at the surface's vertices alone (`thickness`: from `thickness`),
     /// over its triangles.
     #[cfg(test)]
     pub fn at_vertices(surface: &SurfaceMesh, thickness: &[[f64; 2]]) -> ThicknessSamples {
