@@ -53,7 +53,7 @@ impl Node {
     /// Parameter interval `[t0, t1]` where the ray `o + t d` is in the box, clipped to
     /// `[0, t_max]`; `None` when empty. `inv` is `1 / d` componentwise (±∞ for 0).
     #[inline]
-    fn ray_interval(&self, o: [f64; 3], inv: [f64; 3], t_max: f64) -> Option<f64> {
+    pub(super) fn ray_interval(&self, o: [f64; 3], inv: [f64; 3], t_max: f64) -> Option<f64> {
         let mut t0 = 0.0f64;
         let mut t1 = t_max;
         for k in 0..3 {

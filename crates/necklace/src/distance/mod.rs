@@ -14,7 +14,11 @@
 //! not cross itself; where it crosses itself or has non-manifold vertices, on each
 //! triangle away from them whose side winding numbers, read once at four points, agree;
 //! where it has holes, on each triangle far enough from them for a bound on the winding
-//! number's change).
+//! number's change). Where the pseudonormals do not decide and the triangles form a
+//! closed chain, the winding number is the exact count of signed crossings along a
+//! segment out of the tree's box (`crossing`): it visits the leaves along one segment,
+//! where the fast winding number sums the solid angles of every triangle near the
+//! query, hundreds where parts overlap or cross.
 //! A dense input the pipeline simplifies is built [`SurfaceDistance::without_winding`] (no
 //! winding expansions, no pseudonormals: the stages that ask signs work on the copy;
 //! [`SurfaceDistance::add_winding`] adds the expansions); [`SurfaceDistance::recording`]
@@ -45,6 +49,7 @@
 //! per-point results bit for bit whatever the number of threads.
 
 mod bvh;
+mod crossing;
 mod nesting;
 mod pseudonormal;
 mod winding;
@@ -226,7 +231,7 @@ impl SurfaceDistance {
             self.bvh.faces.len() == mesh.triangles.len() && triangles_close(&mesh.triangles);
         let pseudonormals = match (&self.crossings, &self.expansions) {
             (Some(crossings), Some(expansions)) => {
-                let winding = |p: [f64; 3]| winding::fast(&self.bvh, expansions, p);
+                let winding = |p: [f64; 3]| self.winding_of_chain(expansions, p);
                 let local = pseudonormal::Local {
                     crossings,
                     winding: &winding,
@@ -324,9 +329,27 @@ impl SurfaceDistance {
         }
     }
 
-    /// Whether `p` is inside: fast winding number at least 0.5.
+    /// Whether `p` is inside: winding number at least 0.5. On triangles that form a
+    /// closed chain (found by [`use_pseudonormal_sign`](Self::use_pseudonormal_sign))
+    /// it is the exact count of signed crossings along a segment out of the tree's box
+    /// (`crossing`), else (and where every segment tried passes through a side or a
+    /// corner) the fast winding number.
     pub fn is_inside(&self, p: [f64; 3]) -> bool {
+        if self.closed_chain {
+            if let Some(w) = crossing::winding_by_crossings(&self.bvh, p) {
+                return w >= 1;
+            }
+        }
         self.winding_number(p) >= 0.5
+    }
+
+    /// The winding number at `p` for the pseudonormals' samples: counted exactly on a
+    /// closed chain where the count is taken, else the fast one.
+    fn winding_of_chain(&self, expansions: &[Expansion], p: [f64; 3]) -> f64 {
+        self.closed_chain
+            .then(|| crossing::winding_by_crossings(&self.bvh, p))
+            .flatten()
+            .map_or_else(|| winding::fast(&self.bvh, expansions, p), f64::from)
     }
 
     /// Distance to the surface, negative inside ([`is_inside`](Self::is_inside), or the

@@ -13,7 +13,7 @@
 //! holds it) are removed, and each face of the cavity's boundary is joined to the point.
 //!
 //! Robustness: the orientation and in-sphere tests are Shewchuk's exact adaptive
-//! predicates (the `robust` crate, the only module that names it). With a strict
+//! predicates (the `robust` crate, named here and in `distance::crossing` alone). With a strict
 //! in-sphere test the cavity is star-shaped from the point even where five points are
 //! cospherical (a lattice, the corners of a rectangle on the surface): a boundary face
 //! coplanar with the point would put the point strictly inside the circumcircle of the

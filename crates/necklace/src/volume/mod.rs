@@ -67,7 +67,7 @@
 //! bisects the surface to the spacing its thickness asks for, adds interior points from
 //! an octree graded by the distance to it, takes the Delaunay tetrahedralization of both
 //! (`delaunay`: Bowyer–Watson with Shewchuk's exact predicates, points added in batches,
-//! the only place `robust` is named), bisects boundary triangles until they are its faces
+//! the only place in `volume` that names `robust`), bisects boundary triangles until they are its faces
 //! (pairs flipped where it took the other diagonal), keeps the tets whose centroid is
 //! inside, then runs `chords` and `quality` with the samples fixed; [`SampledStats`] go
 //! in the report, and a warning where triangles stay unrecovered.

@@ -28,7 +28,7 @@ const CRATES: &[(&str, Option<&[&str]>)] = &[
     ("serde", None),
     ("rayon", None),
     ("tritet", Some(&["volume::tetgen"])),
-    ("robust", Some(&["volume::delaunay"])),
+    ("robust", Some(&["volume::delaunay", "distance::crossing"])),
     ("kiddo", Some(&["morse"])),
     ("nalgebra", Some(&["morse", "loops"])),
     ("png", Some(&["render"])),
