@@ -14,11 +14,11 @@
 //! not cross itself; where it crosses itself or has non-manifold vertices, on each
 //! triangle away from them whose side winding numbers, read once at four points, agree;
 //! where it has holes, on each triangle far enough from them for a bound on the winding
-//! number's change). Where the pseudonormals do not decide and the triangles form a
-//! closed chain, the winding number is the exact count of signed crossings along a
-//! segment out of the tree's box (`crossing`): it visits the leaves along one segment,
-//! where the fast winding number sums the solid angles of every triangle near the
-//! query, hundreds where parts overlap or cross.
+//! number's change). Where the pseudonormals do not decide, the winding number is the
+//! exact count of signed crossings along a segment out of the tree's box (`crossing`),
+//! less, on a surface with holes, the winding number of the cones that close them: it
+//! visits the leaves along one segment, where the fast winding number sums the solid
+//! angles of every triangle near the query, hundreds where parts overlap or cross.
 //! A dense input the pipeline simplifies is built [`SurfaceDistance::without_winding`] (no
 //! winding expansions, no pseudonormals: the stages that ask signs work on the copy;
 //! [`SurfaceDistance::add_winding`] adds the expansions); [`SurfaceDistance::recording`]
@@ -117,6 +117,12 @@ pub struct SurfaceDistance {
     /// integer off the surface and its sign changes only across the surface. False
     /// until then.
     closed_chain: bool,
+    /// The triangles that close the chain (none for a closed one; cones over the
+    /// unbalanced edges of one with holes), as found by
+    /// [`SurfaceDistance::use_pseudonormal_sign`]: the winding number is then counted
+    /// by crossings (`crossing`). `None` until then, or with more than
+    /// [`crossing::MAX_CLOSURE`] unbalanced edges or triangles left out of the tree.
+    closing: Option<std::sync::Arc<crossing::Closure>>,
     /// The crossing pairs of the mesh, when found once for all
     /// ([`SurfaceDistance::of_surface`], [`SurfaceDistance::with_crossings`]).
     crossings: Option<std::sync::Arc<Vec<[u32; 2]>>>,
@@ -171,6 +177,7 @@ impl SurfaceDistance {
             pseudonormals: None,
             scale,
             closed_chain: false,
+            closing: None,
             crossings: None,
         }
     }
@@ -227,8 +234,11 @@ impl SurfaceDistance {
     /// (`pseudonormal`). Returns whether any triangle decides by its
     /// pseudonormal (the sign stays on the winding number otherwise).
     pub fn use_pseudonormal_sign(&mut self, mesh: &SurfaceMesh) -> bool {
-        self.closed_chain =
-            self.bvh.faces.len() == mesh.triangles.len() && triangles_close(&mesh.triangles);
+        let complete = self.bvh.faces.len() == mesh.triangles.len();
+        let unbalanced = unbalanced_sides(&mesh.triangles);
+        self.closed_chain = complete && unbalanced.is_empty();
+        self.closing = (complete && unbalanced.len() <= crossing::MAX_CLOSURE)
+            .then(|| std::sync::Arc::new(crossing::Closure::new(&mesh.positions, &unbalanced)));
         let pseudonormals = match (&self.crossings, &self.expansions) {
             (Some(crossings), Some(expansions)) => {
                 let winding = |p: [f64; 3]| self.winding_of_chain(expansions, p);
@@ -329,27 +339,31 @@ impl SurfaceDistance {
         }
     }
 
-    /// Whether `p` is inside: winding number at least 0.5. On triangles that form a
-    /// closed chain (found by [`use_pseudonormal_sign`](Self::use_pseudonormal_sign))
-    /// it is the exact count of signed crossings along a segment out of the tree's box
-    /// (`crossing`), else (and where every segment tried passes through a side or a
-    /// corner) the fast winding number.
+    /// Whether `p` is inside: winding number at least 0.5. Once
+    /// [`use_pseudonormal_sign`](Self::use_pseudonormal_sign) has closed the chain
+    /// (nothing to add, or cones over its holes), it is the exact count of signed
+    /// crossings along a segment out of the tree's box, less the cones' winding number
+    /// (`crossing`); else (and where every segment tried passes through a side or
+    /// a corner) the fast winding number.
     pub fn is_inside(&self, p: [f64; 3]) -> bool {
-        if self.closed_chain {
-            if let Some(w) = crossing::winding_by_crossings(&self.bvh, p) {
-                return w >= 1;
-            }
+        if let Some(w) = self.counted_winding(p) {
+            return w >= 0.5;
         }
         self.winding_number(p) >= 0.5
     }
 
-    /// The winding number at `p` for the pseudonormals' samples: counted exactly on a
-    /// closed chain where the count is taken, else the fast one.
+    /// The winding number at `p` counted by crossings, where the chain is closed
+    /// ([`SurfaceDistance::closing`]) and a segment was not degenerate.
+    fn counted_winding(&self, p: [f64; 3]) -> Option<f64> {
+        let closure = self.closing.as_deref()?;
+        crossing::winding_by_crossings(&self.bvh, closure, p)
+    }
+
+    /// The winding number at `p` for the pseudonormals' samples: counted where it can
+    /// be, else the fast one.
     fn winding_of_chain(&self, expansions: &[Expansion], p: [f64; 3]) -> f64 {
-        self.closed_chain
-            .then(|| crossing::winding_by_crossings(&self.bvh, p))
-            .flatten()
-            .map_or_else(|| winding::fast(&self.bvh, expansions, p), f64::from)
+        self.counted_winding(p)
+            .unwrap_or_else(|| winding::fast(&self.bvh, expansions, p))
     }
 
     /// Distance to the surface, negative inside ([`is_inside`](Self::is_inside), or the
@@ -463,10 +477,12 @@ impl SurfaceDistance {
     }
 }
 
-/// Whether every edge of `triangles` is used as often in one direction as in the other
-/// (degenerate sides, from a vertex to itself, are no edges).
-fn triangles_close(triangles: &[[u32; 3]]) -> bool {
-    // Each side as (edge, ±1), sorted by edge: the edge's uses sum to 0 in each run.
+/// The directed sides to add to `triangles` so that every edge is used as often in one
+/// direction as in the other, each as often as its edge is unbalanced (none: the
+/// triangles close; degenerate sides, from a vertex to itself, are no edges). Sorted.
+fn unbalanced_sides(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    // Each side as (edge, ±1), sorted by edge: the edge's uses sum to 0 in each run
+    // where it is balanced.
     let mut sides: Vec<([u32; 2], i32)> = triangles
         .iter()
         .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
@@ -474,9 +490,15 @@ fn triangles_close(triangles: &[[u32; 3]]) -> bool {
         .map(|(a, b)| ([a.min(b), a.max(b)], if a < b { 1 } else { -1 }))
         .collect();
     sides.sort_unstable();
-    sides
-        .chunk_by(|x, y| x.0 == y.0)
-        .all(|run| run.iter().map(|s| s.1).sum::<i32>() == 0)
+    let mut missing = Vec::new();
+    for run in sides.chunk_by(|x, y| x.0 == y.0) {
+        let [a, b] = run[0].0;
+        let excess: i32 = run.iter().map(|s| s.1).sum();
+        // More uses a → b than b → a: the closure goes b → a, as often as the excess.
+        let side = if excess > 0 { [b, a] } else { [a, b] };
+        missing.extend(std::iter::repeat_n(side, excess.unsigned_abs() as usize));
+    }
+    missing
 }
 
 impl SurfaceDistance {
