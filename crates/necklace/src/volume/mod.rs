@@ -281,10 +281,21 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     // spacing the features may ask for is the floor that fits their estimate, that
     // estimate calibrated on an octree; a tree or a mesh still over the budget
     // coarsens the floor and starts again.
-    let (mut floor, fits) = calibrated_floor(domain, options, &features, lo, hi)?;
+    let Calibration {
+        mut floor,
+        fits,
+        over,
+    } = calibrated_floor(domain, options, &features, lo, hi)?;
+    // The calibration's tree at that floor over the budget is the first attempt's
+    // failure: it would build the same tree again.
+    let mut known_failure = over;
     let (lattice, features) = loop {
         let clamped = clamp_spacing(&features, floor);
-        match stuff_lattice(domain, options, &clamped, lo, hi) {
+        let attempt = match known_failure.take() {
+            Some(failed) => Err(failed),
+            None => stuff_lattice(domain, options, &clamped, lo, hi),
+        };
+        match attempt {
             Ok(lattice) => break (lattice, clamped),
             Err(Failed::OverBudget(estimate, e)) => {
                 if floor.is_some_and(|f| f >= h) || clamped.is_empty() {
@@ -293,13 +304,15 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
                 let finest = clamped.iter().map(|f| f.spacing).fold(h, f64::min);
                 floor = Some(match fits {
                     // Halfway (on a log scale) to the floor whose tree fitted, and that
-                    // floor itself once within 5 % of it.
+                    // floor itself once within a factor 2 of the one that failed: cells
+                    // are powers of two, so a floor between them would mostly build the
+                    // failed tree again (on ps_mk3_bed three floors from 0.195 to 0.252
+                    // did, 4 s each, before 0.274 fitted).
                     Some(fits) if fits > finest => {
-                        let between = (fits * finest).sqrt();
-                        if between * 1.05 >= fits {
+                        if fits <= 2.0 * finest {
                             fits
                         } else {
-                            between
+                            (fits * finest).sqrt()
                         }
                     }
                     // Tets grow like the inverse square of the spacing along a surface:
@@ -443,23 +456,35 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
 /// it alone binds where the budget has room. Where it binds, the octree at that floor
 /// (which fits the budget, the estimate being high) gives the ratio of its count to the
 /// estimate's, and the floor is found again with the estimate scaled by that ratio and
-/// a tenth (at most 1, at least 1/16). `None`: no floor needed. Also the floor whose octree was
-/// seen to fit, if any.
+/// a tenth (at most 1, at least 1/16). No floor: none needed. Also the floor whose octree was
+/// seen to fit, if any, and the octree's failure where it did not (the first attempt,
+/// at the same floor, takes it instead of building it again: mf_Offset1's inside spent
+/// 26 s on each).
 fn calibrated_floor(
     domain: &dyn Domain,
     options: &StuffingOptions,
     features: &[SizingFeature],
     lo: [f64; 3],
     hi: [f64; 3],
-) -> Result<(Option<f64>, Option<f64>)> {
+) -> Result<Calibration> {
     let Some(floor) = spacing_floor(features, options) else {
-        return Ok((None, None));
+        return Ok(Calibration {
+            floor: None,
+            fits: None,
+            over: None,
+        });
     };
     let clamped = clamp_spacing(features, Some(floor));
     let grid = Grid::new(lo, hi, options.h, &clamped)?;
     let tree = match build_octree(domain, &grid, &clamped, options) {
         Ok(tree) => tree,
-        Err(Failed::OverBudget(..)) => return Ok((Some(floor), None)),
+        Err(failed @ Failed::OverBudget(..)) => {
+            return Ok(Calibration {
+                floor: Some(floor),
+                fits: None,
+                over: Some(failed),
+            })
+        }
         Err(Failed::Other(e)) => return Err(e),
     };
     let estimate = sizing::feature_estimate(features, floor);
@@ -470,7 +495,20 @@ fn calibrated_floor(
     // handles, this 2.57 M and all 95).
     let ratio = (1.1 * tree.estimated_tets as f64 / estimate).clamp(1.0 / 16.0, 1.0);
     let calibrated = sizing::spacing_floor_scaled(features, options, ratio).map(|f| f.min(floor));
-    Ok((calibrated, Some(floor)))
+    Ok(Calibration {
+        floor: calibrated,
+        fits: Some(floor),
+        over: None,
+    })
+}
+
+/// What [`calibrated_floor`] found: the floor to start from, the floor whose tree
+/// fitted the budget (if one did), and the failure of the tree at `floor` when it did
+/// not (that tree need not be built again).
+struct Calibration {
+    floor: Option<f64>,
+    fits: Option<f64>,
+    over: Option<Failed>,
 }
 
 /// Steps 1 to 3 with the given features: the octree, its background lattice, the
