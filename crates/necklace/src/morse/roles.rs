@@ -153,26 +153,31 @@ impl Sweep {
         if !is_above(from) || !is_above(to) {
             return None;
         }
-        let mut parent: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
-        parent.insert(from, from);
+        // Parents by vertex (`NONE`: not reached): one array per search, written
+        // once, where a hash map spent most of the search hashing.
+        const NONE: u32 = u32::MAX;
+        let mut parent = vec![NONE; self.kinds.len()];
+        parent[from as usize] = from;
+        let mut reached = 1usize;
         let mut queue = std::collections::VecDeque::from([from]);
         while let Some(u) = queue.pop_front() {
             if u == to {
                 let mut path = vec![v, to];
                 let mut x = to;
                 while x != from {
-                    x = parent[&x];
+                    x = parent[x as usize];
                     path.push(x);
                 }
                 return Some(path);
             }
-            if parent.len() > limit {
+            if reached > limit {
                 return None;
             }
             let u = u as usize;
             for &w in &self.neighbours[self.start[u]..self.start[u + 1]] {
-                if w != v && is_above(w) && !parent.contains_key(&w) {
-                    parent.insert(w, u as u32);
+                if w != v && is_above(w) && parent[w as usize] == NONE {
+                    parent[w as usize] = u as u32;
+                    reached += 1;
                     queue.push_back(w);
                 }
             }
