@@ -100,6 +100,11 @@ impl Closure {
         let expansions = winding::expansions(&bvh);
         Closure { bvh, expansions }
     }
+
+    /// Whether there is nothing to close: the triangles form a closed chain.
+    pub(super) fn is_empty(&self) -> bool {
+        self.bvh.tris.is_empty()
+    }
 }
 
 /// The tilt of the segments off their axis, in the other two coordinates (fixed

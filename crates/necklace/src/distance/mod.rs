@@ -111,17 +111,12 @@ pub struct SurfaceDistance {
     pseudonormals: Option<std::sync::Arc<Pseudonormals>>,
     /// Bounding-box diagonal of the usable triangles (the length scale of tolerances).
     scale: f64,
-    /// Whether the triangles form a closed chain (every edge used as often in each
-    /// direction, no triangle left out), as found by
-    /// [`SurfaceDistance::use_pseudonormal_sign`]: the winding number is then an
-    /// integer off the surface and its sign changes only across the surface. False
-    /// until then.
-    closed_chain: bool,
-    /// The triangles that close the chain (none for a closed one; cones over the
-    /// unbalanced edges of one with holes), as found by
-    /// [`SurfaceDistance::use_pseudonormal_sign`]: the winding number is then counted
-    /// by crossings (`crossing`). `None` until then, or with more than
-    /// [`crossing::MAX_CLOSURE`] unbalanced edges or triangles left out of the tree.
+    /// The triangles that close the chain (none where the triangles already form a
+    /// closed chain, `closed_chain`; cones over the unbalanced edges
+    /// of one with holes), as found by [`SurfaceDistance::use_pseudonormal_sign`]: the
+    /// winding number is then counted by crossings (`crossing`). `None` until then, or
+    /// with more than [`crossing::MAX_CLOSURE`] unbalanced edges or triangles left out
+    /// of the tree.
     closing: Option<std::sync::Arc<crossing::Closure>>,
     /// The crossing pairs of the mesh, when found once for all
     /// ([`SurfaceDistance::of_surface`], [`SurfaceDistance::with_crossings`]).
@@ -176,7 +171,6 @@ impl SurfaceDistance {
             expansions: None,
             pseudonormals: None,
             scale,
-            closed_chain: false,
             closing: None,
             crossings: None,
         }
@@ -236,7 +230,6 @@ impl SurfaceDistance {
     pub fn use_pseudonormal_sign(&mut self, mesh: &SurfaceMesh) -> bool {
         let complete = self.bvh.faces.len() == mesh.triangles.len();
         let unbalanced = unbalanced_sides(&mesh.triangles);
-        self.closed_chain = complete && unbalanced.is_empty();
         self.closing = (complete && unbalanced.len() <= crossing::MAX_CLOSURE)
             .then(|| std::sync::Arc::new(crossing::Closure::new(&mesh.positions, &unbalanced)));
         let pseudonormals = match (&self.crossings, &self.expansions) {
@@ -352,6 +345,17 @@ impl SurfaceDistance {
         self.winding_number(p) >= 0.5
     }
 
+    /// Whether the triangles form a closed chain (every edge used as often in each
+    /// direction, no triangle left out), as found by
+    /// [`use_pseudonormal_sign`](Self::use_pseudonormal_sign): the winding number is then
+    /// an integer off the surface and its sign changes only across the surface. False
+    /// until then.
+    fn closed_chain(&self) -> bool {
+        self.closing
+            .as_deref()
+            .is_some_and(crossing::Closure::is_empty)
+    }
+
     /// The winding number at `p` counted by crossings, where the chain is closed
     /// ([`SurfaceDistance::closing`]) and a segment was not degenerate.
     fn counted_winding(&self, p: [f64; 3]) -> Option<f64> {
@@ -429,7 +433,7 @@ impl SurfaceDistance {
             .par_iter()
             .enumerate()
             .map(|(i, &p)| match signs.get(i) {
-                Some(&s) if s != 0 && self.closed_chain => {
+                Some(&s) if s != 0 && self.closed_chain() => {
                     let d = self.distance_within(p, band);
                     if d > 0.0 && d.is_finite() {
                         d * f64::from(s.signum())

@@ -306,8 +306,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
                     // Halfway (on a log scale) to the floor whose tree fitted, and that
                     // floor itself once within a factor 2 of the one that failed: cells
                     // are powers of two, so a floor between them would mostly build the
-                    // failed tree again (on ps_mk3_bed three floors from 0.195 to 0.252
-                    // did, 4 s each, before 0.274 fitted).
+                    // failed tree again (`docs/decisions.md`, Volume mesh).
                     Some(fits) if fits > finest => {
                         if fits <= 2.0 * finest {
                             fits
@@ -458,8 +457,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
 /// estimate's, and the floor is found again with the estimate scaled by that ratio and
 /// a tenth (at most 1, at least 1/16). No floor: none needed. Also the floor whose octree was
 /// seen to fit, if any, and the octree's failure where it did not (the first attempt,
-/// at the same floor, takes it instead of building it again: mf_Offset1's inside spent
-/// 26 s on each).
+/// at the same floor, takes it instead of building the same tree again).
 fn calibrated_floor(
     domain: &dyn Domain,
     options: &StuffingOptions,
