@@ -37,7 +37,11 @@
 //!    regions several times), sets a floor on their spacing ([`spacing_floor`]; reported in
 //!    [`StuffingStats::spacing_floor`]), a tree or a mesh still over it raises the floor
 //!    and starts again, and a run over it without thin parts to coarsen is refused with the
-//!    figure ([`ErrorKind::OverBudget`]), before the lattice is allocated. The pipeline
+//!    figure ([`ErrorKind::OverBudget`]), before the lattice is allocated. A tree is given
+//!    up within the level that crosses the budget (it goes in eighths, unbalanced), and
+//!    says what it would have given stopped at each level it reached: below `h` only thin
+//!    parts split cells, and a floor of a level's cell size splits none of that size, so
+//!    the next floor is the size of the finest level that fits. The pipeline
 //!    gives each of two sides meshed at once half of [`VolumeOptions::max_memory`]. A
 //!    cell whose parent's value is larger than the distance between their centres has
 //!    the parent's sign, and the domain is told so ([`Domain::values_within_signed`]):
@@ -280,7 +284,8 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     // 1–3. Octree, background lattice, stuffing, within the budget: the finest
     // spacing the features may ask for is the floor that fits their estimate, that
     // estimate calibrated on an octree; a tree or a mesh still over the budget
-    // coarsens the floor and starts again.
+    // coarsens the floor (to the finest level of that tree that fits, when it names
+    // one) and starts again.
     let Calibration {
         mut floor,
         fits,
@@ -297,17 +302,36 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         };
         match attempt {
             Ok(lattice) => break (lattice, clamped),
-            Err(Failed::OverBudget(estimate, e)) => {
+            Err(Failed::OverBudget {
+                estimate,
+                truncations,
+                error,
+            }) => {
                 if floor.is_some_and(|f| f >= h) || clamped.is_empty() {
-                    return Err(e);
+                    return Err(error);
                 }
                 let finest = clamped.iter().map(|f| f.spacing).fold(h, f64::min);
-                floor = Some(match fits {
+                // The finest level at which the failed tree, stopped there, fits: a
+                // floor of that level's cell size builds that tree. At least half as
+                // coarse again as the failed floor, so that the search moves on.
+                let stopped = truncations
+                    .iter()
+                    .filter(|t| {
+                        t.size >= 1.5 * finest
+                            && t.size <= h
+                            && t.estimated_tets <= options.max_tets() as f64
+                    })
+                    .map(|t| t.size)
+                    .reduce(f64::min);
+                let fits = fits.filter(|&fits| fits > finest);
+                floor = Some(match (stopped, fits) {
+                    // A floor whose tree was built and fitted is the surer of the two.
+                    (Some(stopped), fits) => fits.map_or(stopped, |fits| stopped.min(fits)),
                     // Halfway (on a log scale) to the floor whose tree fitted, and that
                     // floor itself once within a factor 2 of the one that failed: cells
                     // are powers of two, so a floor between them would mostly build the
                     // failed tree again (`docs/decisions.md`, Volume mesh).
-                    Some(fits) if fits > finest => {
+                    (None, Some(fits)) => {
                         if fits <= 2.0 * finest {
                             fits
                         } else {
@@ -317,7 +341,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
                     // Tets grow like the inverse square of the spacing along a surface:
                     // coarsen by the square root of the excess (a quarter more at
                     // least).
-                    _ => {
+                    (None, None) => {
                         let excess = estimate / options.max_tets() as f64;
                         (finest * excess.sqrt().max(1.25) * 1.1).min(h)
                     }
@@ -476,7 +500,7 @@ fn calibrated_floor(
     let grid = Grid::new(lo, hi, options.h, &clamped)?;
     let tree = match build_octree(domain, &grid, &clamped, options) {
         Ok(tree) => tree,
-        Err(failed @ Failed::OverBudget(..)) => {
+        Err(failed @ Failed::OverBudget { .. }) => {
             return Ok(Calibration {
                 floor: Some(floor),
                 fits: None,
@@ -562,6 +586,7 @@ fn stuff_lattice(
     if stuffed.tets.len() > options.max_tets() {
         return Err(over_budget(
             stuffed.tets.len() as f64,
+            Vec::new(),
             options,
             grid.finest_cell(&tree.octree),
         ));
@@ -672,8 +697,26 @@ struct Tree {
 /// A meshing attempt that failed: over the budget (with the estimate that was), or for
 /// another reason.
 enum Failed {
-    OverBudget(f64, Error),
+    OverBudget {
+        estimate: f64,
+        /// What the tree would have been, stopped at each level it built (empty
+        /// where the stuffing, not the tree, was over).
+        truncations: Vec<Truncation>,
+        error: Error,
+    },
     Other(Error),
+}
+
+/// An octree stopped at one level: where no cell of that level is split for a thin
+/// part, the tree a floor of `size` builds (below the spacing `h`, only thin parts split
+/// cells, and a floor of a cell's size splits none of its size: `build_octree`).
+#[derive(Debug, Clone, Copy)]
+struct Truncation {
+    /// The level's cell size.
+    size: f64,
+    /// The tets that tree would give, estimated as `build_octree` estimates a whole
+    /// tree's (before the 2:1 balance, which adds some).
+    estimated_tets: f64,
 }
 
 impl From<Error> for Failed {
@@ -685,15 +728,21 @@ impl From<Error> for Failed {
 impl Failed {
     fn error(self) -> Error {
         match self {
-            Failed::OverBudget(_, e) | Failed::Other(e) => e,
+            Failed::OverBudget { error: e, .. } | Failed::Other(e) => e,
         }
     }
 }
 
-fn over_budget(estimate: f64, options: &StuffingOptions, finest: f64) -> Failed {
-    Failed::OverBudget(
+fn over_budget(
+    estimate: f64,
+    truncations: Vec<Truncation>,
+    options: &StuffingOptions,
+    finest: f64,
+) -> Failed {
+    Failed::OverBudget {
         estimate,
-        Error::new(
+        truncations,
+        error: Error::new(
             ErrorKind::OverBudget,
             format!(
                 "the volume mesh would have about {estimate:.2e} tets (smallest cells {finest:.2e}), about {} at {BYTES_PER_TET} bytes a tet, over the memory budget of {}: raise it with --max-memory, or pass a larger --h",
@@ -701,7 +750,99 @@ fn over_budget(estimate: f64, options: &StuffingOptions, finest: f64) -> Failed 
                 memory_text(options.max_memory as f64)
             ),
         ),
-    )
+    }
+}
+
+/// The leaves an octree under construction has so far, against the budget, and what
+/// the tree would give stopped at each level ([`Truncation`]).
+///
+/// The next level has eight cells for each split one, and a split cell is counted as
+/// one leaf more (it was split where the boundary may pass or a thin part asks, so it
+/// leaves at least one leaf that gives tets, but for a thin part's split wholly
+/// outside): past the leaves allowed the tree is over the budget whatever follows.
+/// Leaves wholly outside count for nothing (inside a thin solid most of the tree is
+/// outside it).
+struct LeafCount {
+    max_leaves: usize,
+    /// Leaves not wholly outside in the finished levels: inside, crossed (the boundary
+    /// may cross them).
+    finished: [usize; 2],
+    /// This level's cell size, its leaves and split cells so far, and its cells not
+    /// wholly outside (all of them leaves were the tree stopped here) and those of
+    /// them not split, inside and crossed.
+    size: f64,
+    leaves: usize,
+    split: usize,
+    level: [usize; 2],
+    unsplit: [usize; 2],
+    truncations: Vec<Truncation>,
+    /// The leaves counted when the tree was given up (the level's count scaled from
+    /// the part of it evaluated).
+    too_big: Option<usize>,
+}
+
+impl LeafCount {
+    /// Leaves give at least half a leaf's tets each: `max_tets` allows this many.
+    fn new(max_tets: usize) -> Self {
+        LeafCount {
+            max_leaves: (max_tets as f64 / (0.5 * TETS_PER_LEAF)) as usize + 1,
+            finished: [0; 2],
+            size: 0.0,
+            leaves: 0,
+            split: 0,
+            level: [0; 2],
+            unsplit: [0; 2],
+            truncations: Vec::new(),
+            too_big: None,
+        }
+    }
+
+    fn start_level(&mut self, size: f64) {
+        (self.size, self.leaves, self.split) = (size, 0, 0);
+        (self.level, self.unsplit) = ([0; 2], [0; 2]);
+    }
+
+    /// One cell of the level: split or not, and `crossed` (whether the boundary may
+    /// cross it) unless it is wholly outside.
+    fn add(&mut self, split: bool, crossed: Option<bool>) {
+        if split {
+            self.split += 1;
+        }
+        if let Some(crossed) = crossed {
+            let k = usize::from(crossed);
+            self.level[k] += 1;
+            if !split {
+                self.leaves += 1;
+                self.unsplit[k] += 1;
+            }
+        }
+    }
+
+    /// After a part of the level (`share` of its cells so far): whether the tree is
+    /// over the budget (then it is given up, and the level stopped here is the last
+    /// truncation, its counts scaled to the whole level).
+    fn over(&mut self, share: f64) -> bool {
+        let finished = self.finished[0] + self.finished[1];
+        let over = finished + self.leaves + self.split > self.max_leaves;
+        if over || share >= 1.0 {
+            let [inside, crossed] = self.level.map(|n| n as f64 / share);
+            self.truncations.push(Truncation {
+                size: self.size,
+                estimated_tets: TETS_PER_LEAF
+                    * ((self.finished[0] as f64 + inside)
+                        + 0.5 * (self.finished[1] as f64 + crossed)),
+            });
+        }
+        if over {
+            self.too_big = Some(finished + ((self.leaves + self.split) as f64 / share) as usize);
+        }
+        over
+    }
+
+    fn end_level(&mut self) {
+        self.finished[0] += self.unsplit[0];
+        self.finished[1] += self.unsplit[1];
+    }
 }
 
 /// Refine from the root, level by level: a cell is split while the boundary may pass
@@ -718,77 +859,70 @@ fn build_octree(
     // Leaves not wholly outside give at least half a leaf's tets each: past this many
     // the tree is over the budget whatever follows. (Leaves wholly outside give none:
     // inside a thin solid most of the tree is outside it.)
-    let max_leaves = (options.max_tets() as f64 / (0.5 * TETS_PER_LEAF)) as usize + 1;
-    let mut leaves_so_far = 0usize;
-    let mut too_big: Option<usize> = None;
+    let mut count = LeafCount::new(options.max_tets());
     let mut dead: HashSet<Cell> = HashSet::default();
     let mut centre_values: HashMap<Key, f64> = HashMap::default();
     let mut lists = sizing::FeatureLists::new(features, grid.root, h);
     let to_point = |k: Key| grid.point(k);
-    let octree = Octree::build(grid.root, |cells| {
-        if too_big.is_some() {
-            return vec![false; cells.len()];
-        }
-        let centres: Vec<[f64; 3]> = cells.iter().map(|c| grid.point(c.center())).collect();
+    let octree = Octree::build_unless(grid.root, |cells| {
         // All cells of one level have the same size.
         let size = grid.length(cells.first().map_or(0, |c| c.size));
         let half_diagonal = 0.5 * 3f64.sqrt() * size;
-        // A cell's centre is half its diagonal from its parent's: where the parent's
-        // value is larger (f is 1-Lipschitz; a value beyond the band is a bound), no
-        // boundary lies between them and the sign is the parent's.
-        let signs: Vec<i8> = cells
-            .iter()
-            .map(|cell| {
-                octree::parent(grid.root, *cell)
-                    .and_then(|parent| centre_values.get(&parent.center()))
-                    .filter(|f| f.abs() > half_diagonal * (1.0 + 1e-9))
-                    .map_or(0, |f| if *f < 0.0 { -1 } else { 1 })
-            })
-            .collect();
-        let values = domain.values_within_signed(&centres, half_diagonal + coarsest, &signs);
         let thin = lists.level(cells, &to_point, grid.unit);
-        let decisions: Vec<bool> = cells
-            .iter()
-            .zip(values)
-            .zip(thin)
-            .map(|((cell, f), thin_spacing)| {
+        // In eighths: past the leaves allowed, the rest of the level is not evaluated
+        // (a level costs a distance per cell; figures in `docs/decisions.md`, Volume
+        // mesh), the next level not built, nor the tree balanced.
+        let part = cells.len().div_ceil(8).max(1 << 14);
+        count.start_level(size);
+        let mut decisions = Vec::with_capacity(cells.len());
+        for (cells_part, thin) in cells.chunks(part).zip(thin.chunks(part)) {
+            let centres: Vec<[f64; 3]> =
+                cells_part.iter().map(|c| grid.point(c.center())).collect();
+            // A cell's centre is half its diagonal from its parent's: where the
+            // parent's value is larger (f is 1-Lipschitz; a value beyond the band is a
+            // bound), no boundary lies between them and the sign is the parent's.
+            let signs: Vec<i8> = cells_part
+                .iter()
+                .map(|cell| {
+                    octree::parent(grid.root, *cell)
+                        .and_then(|parent| centre_values.get(&parent.center()))
+                        .filter(|f| f.abs() > half_diagonal * (1.0 + 1e-9))
+                        .map_or(0, |f| if *f < 0.0 { -1 } else { 1 })
+                })
+                .collect();
+            let values = domain.values_within_signed(&centres, half_diagonal + coarsest, &signs);
+            for ((cell, f), &thin_spacing) in cells_part.iter().zip(values).zip(thin) {
                 centre_values.insert(cell.center(), f);
-                if f > half_diagonal * (1.0 + 1e-9) {
+                let is_dead = f > half_diagonal * (1.0 + 1e-9);
+                if is_dead {
                     dead.insert(*cell);
                 }
                 // Cell sizes are powers of two: take the one nearest the spacing asked
-                // for (within a factor √2).
-                if thin_spacing * std::f64::consts::SQRT_2 < size {
-                    return true;
-                }
-                // Only where the boundary may pass (f is 1-Lipschitz). A margin of one
-                // more cell (`half_diagonal + wanted`) keeps a band of fine cells 3–4 h
-                // thick on each side: 15–30 % more unknowns and the same loops, angles
-                // and topology on the shared models.
-                if f.abs() >= half_diagonal {
-                    return false;
-                }
-                let wanted = domain.spacing_near(grid.point(cell.center()), h).max(h);
-                size > wanted * (1.0 + 1e-9)
-            })
-            .collect();
-        leaves_so_far += cells
-            .iter()
-            .zip(&decisions)
-            .filter(|&(cell, &split)| !split && !dead.contains(cell))
-            .count();
-        // The next level has eight cells for each split one, and a split cell is
-        // counted as one leaf more (it was split where the boundary may pass or a
-        // thin part asks, so it leaves at least one leaf that gives tets, but for a
-        // thin part's split wholly outside): past the leaves allowed, the next level
-        // is not built (a level costs a distance per cell; figures in
-        // `docs/decisions.md`, Volume mesh).
-        let split = decisions.iter().filter(|&&d| d).count();
-        if leaves_so_far + split > max_leaves {
-            too_big = Some(leaves_so_far + split);
+                // for (within a factor √2). Else only where the boundary may pass (f is
+                // 1-Lipschitz). A margin of one more cell (`half_diagonal + wanted`)
+                // keeps a band of fine cells 3–4 h thick on each side: 15–30 % more
+                // unknowns and the same loops, angles and topology on the shared
+                // models.
+                let split = thin_spacing * std::f64::consts::SQRT_2 < size
+                    || (f.abs() < half_diagonal
+                        && size
+                            > domain.spacing_near(grid.point(cell.center()), h).max(h)
+                                * (1.0 + 1e-9));
+                count.add(split, (!is_dead).then_some(f >= -half_diagonal));
+                decisions.push(split);
+            }
+            if count.over(decisions.len() as f64 / cells.len() as f64) {
+                return None;
+            }
         }
-        decisions
+        count.end_level();
+        Some(decisions)
     });
+    let (Some(octree), None) = (octree, count.too_big) else {
+        let finest = count.truncations.last().map_or(h, |t| t.size);
+        let estimate = 0.5 * TETS_PER_LEAF * count.too_big.unwrap_or(0) as f64;
+        return Err(over_budget(estimate, count.truncations, options, finest));
+    };
     let leaves = octree.leaves();
     // Leaves inside give all their tets, leaves the boundary may cross about half.
     let (mut inside, mut crossed) = (0usize, 0usize);
@@ -806,12 +940,13 @@ fn build_octree(
             .min()
             .unwrap_or(grid.root.size),
     );
-    if let Some(cells) = too_big {
-        let estimate = 0.5 * TETS_PER_LEAF * cells as f64;
-        return Err(over_budget(estimate, options, finest));
-    }
     if estimated_tets > options.max_tets() {
-        return Err(over_budget(estimated_tets as f64, options, finest));
+        return Err(over_budget(
+            estimated_tets as f64,
+            count.truncations,
+            options,
+            finest,
+        ));
     }
     Ok(Tree {
         leaves: leaves.len(),
@@ -883,4 +1018,130 @@ fn compact(
         .collect();
     let tets: Vec<[u32; 4]> = tets.iter().map(|t| t.map(|v| new_id[v as usize])).collect();
     TetMesh::new(out_positions, tets, kinds)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A slab `|z| ≤ 0.1` in the box `|x|, |y| ≤ 1`, whose mid-plane asks for cells of
+    /// `spacing` within `0.1` of it: a thin part everywhere.
+    struct Slab {
+        spacing: f64,
+    }
+
+    impl Domain for Slab {
+        fn value(&self, p: [f64; 3]) -> f64 {
+            (p[2].abs() - 0.1)
+                .max(p[0].abs() - 1.0)
+                .max(p[1].abs() - 1.0)
+        }
+        fn boundary_kind(&self, _p: [f64; 3]) -> crate::tet::VertexKind {
+            crate::tet::VertexKind::Surface
+        }
+        fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+            ([-1.0, -1.0, -0.1], [1.0, 1.0, 0.1])
+        }
+        fn sizing(&self) -> Vec<SizingFeature> {
+            let corners = [
+                [-1.0, -1.0, 0.0],
+                [1.0, -1.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [-1.0, 1.0, 0.0],
+            ];
+            [[0, 1, 2], [0, 2, 3]]
+                .map(|t| SizingFeature {
+                    corners: t.map(|i| corners[i]),
+                    spacing: self.spacing,
+                    reach: 0.1,
+                    toward: [0.0; 3],
+                })
+                .to_vec()
+        }
+    }
+
+    fn tree_at(
+        slab: &Slab,
+        floor: Option<f64>,
+        options: &StuffingOptions,
+    ) -> std::result::Result<Tree, Failed> {
+        let features = clamp_spacing(&slab.sizing(), floor);
+        let (lo, hi) = slab.bounds();
+        let grid = Grid::new(lo, hi, options.h, &features).unwrap();
+        build_octree(slab, &grid, &features, options)
+    }
+
+    #[test]
+    fn a_tree_over_the_budget_names_the_finest_level_that_fits() {
+        let slab = Slab { spacing: 1e-3 };
+        let options = StuffingOptions {
+            max_memory: (200_000.0 * BYTES_PER_TET) as u64,
+            ..StuffingOptions::new(0.25)
+        };
+        let Err(Failed::OverBudget { truncations, .. }) = tree_at(&slab, None, &options) else {
+            panic!("the finest tree fits a budget it cannot fit");
+        };
+        // Level by level, halving, with more tets at every finer level.
+        for pair in truncations.windows(2) {
+            assert!((pair[0].size / pair[1].size - 2.0).abs() < 1e-12);
+            assert!(pair[1].estimated_tets >= pair[0].estimated_tets);
+        }
+        let fitting = truncations
+            .iter()
+            .rev()
+            .find(|t| t.size <= options.h && t.estimated_tets <= options.max_tets() as f64)
+            .copied()
+            .expect("a level below h fits");
+        // A floor of that level's size builds the tree stopped there (its finest cells
+        // are that size; the 2:1 balance only adds tets) ...
+        let roomy = StuffingOptions {
+            max_memory: u64::MAX,
+            ..options
+        };
+        let Ok(tree) = tree_at(&slab, Some(fitting.size), &roomy) else {
+            panic!("no tree at the level that fits");
+        };
+        let (lo, hi) = slab.bounds();
+        let grid = Grid::new(
+            lo,
+            hi,
+            options.h,
+            &clamp_spacing(&slab.sizing(), Some(fitting.size)),
+        )
+        .unwrap();
+        assert!((grid.finest_cell(&tree.octree) / fitting.size - 1.0).abs() < 1e-12);
+        assert!(tree.estimated_tets as f64 >= fitting.estimated_tets);
+        // ... and half of it, one level finer, is over the budget.
+        assert!(matches!(
+            tree_at(&slab, Some(0.5 * fitting.size), &options),
+            Err(Failed::OverBudget { .. })
+        ));
+        // The whole search lands there (or a level coarser, where the balance or the
+        // stuffing took the level over) and within the budget.
+        let mesh = stuff_volume(&slab, &options).unwrap();
+        assert!(mesh.mesh.num_tets() <= options.max_tets());
+        let finest = mesh.stats.finest_cell;
+        assert!(
+            finest <= 2.0 * fitting.size * (1.0 + 1e-12),
+            "finest cell {finest}, level that fits {}",
+            fitting.size
+        );
+    }
+
+    #[test]
+    fn a_tree_that_gives_up_is_not_built() {
+        let root = Cell {
+            origin: [0; 3],
+            size: 64,
+        };
+        let mut levels = 0;
+        let given_up = Octree::build_unless(root, |cells| {
+            levels += 1;
+            (levels < 3).then(|| vec![true; cells.len()])
+        });
+        assert!(given_up.is_none());
+        assert_eq!(levels, 3);
+        let whole = Octree::build_unless(root, |cells| Some(vec![cells[0].size > 16; cells.len()]));
+        assert_eq!(whole.map(|t| t.leaves().len()), Some(64));
+    }
 }

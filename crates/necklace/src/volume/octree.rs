@@ -54,13 +54,24 @@ pub(crate) struct Octree {
 impl Octree {
     /// Refine from `root`, level by level: `refine` gets the cells of one level and says
     /// which to split (cells of size 2, the smallest, are never split). Then balance.
+    #[cfg(test)]
     pub fn build(root: Cell, mut refine: impl FnMut(&[Cell]) -> Vec<bool>) -> Octree {
+        Octree::build_unless(root, |cells| Some(refine(cells)))
+            .expect("a refinement that never gives up builds a tree")
+    }
+
+    /// [`Octree::build`] where `refine` may give the tree up (`None`): then nothing is
+    /// balanced and there is no tree.
+    pub fn build_unless(
+        root: Cell,
+        mut refine: impl FnMut(&[Cell]) -> Option<Vec<bool>>,
+    ) -> Option<Octree> {
         // The cells that are split; a cell is a leaf when its parent is split and it
         // is not.
         let mut split: HashSet<Cell> = HashSet::default();
         let mut level = vec![root];
         while !level.is_empty() {
-            let decisions = refine(&level);
+            let decisions = refine(&level)?;
             let mut next = Vec::new();
             for (cell, decision) in level.into_iter().zip(decisions) {
                 if decision && cell.size > 2 {
@@ -83,7 +94,7 @@ impl Octree {
         } else {
             leaves.insert(root);
         }
-        Octree { root, leaves }
+        Some(Octree { root, leaves })
     }
 
     /// The leaves, sorted (deterministic order).
