@@ -325,7 +325,8 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
                     .reduce(f64::min);
                 let fits = fits.filter(|&fits| fits > finest);
                 floor = Some(match (stopped, fits) {
-                    // A floor whose tree was built and fitted is the surer of the two.
+                    // The finer of the two: a floor whose tree was built and fitted is
+                    // known to fit; the level only estimated to.
                     (Some(stopped), fits) => fits.map_or(stopped, |fits| stopped.min(fits)),
                     // Halfway (on a log scale) to the floor whose tree fitted, and that
                     // floor itself once within a factor 2 of the one that failed: cells
