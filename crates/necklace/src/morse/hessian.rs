@@ -8,9 +8,10 @@
 //! failure) and `H` is scaled back. `H`'s eigenvalues, ascending, with unit
 //! eigenvectors: a 2-saddle of the field has signature (−, −, +), and the eigenvector of
 //! the positive eigenvalue is the neck's cutting-plane normal. Units: field units per
-//! length². Entry point: [`hessian_at`].
+//! length². Entry point: [`hessian_at`]; a vertex fitted for many fields keeps its
+//! factored matrix in a [`Fit`].
 
-use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen};
+use nalgebra::{DMatrix, DVector, Dyn, Matrix3, SymmetricEigen, SVD};
 use serde::{Deserialize, Serialize};
 
 use crate::tet::TetMesh;
@@ -44,34 +45,62 @@ impl Hessian {
 /// neighbourhood has fewer than 10 vertices even with the two-ring, or a value is
 /// not finite.
 pub fn hessian_at(mesh: &TetMesh, f: &[f64], v: u32) -> Option<Hessian> {
-    // `neighbours` includes the seeds: the one-ring plus `v`.
-    let mut samples = neighbours(mesh, &[v]);
-    if samples.len() < 11 {
-        samples = neighbours(mesh, &samples);
-    }
-    if samples.len() < 10 {
-        return None;
-    }
-    let centre = mesh.positions[v as usize];
-    let offsets: Vec<[f64; 3]> = samples
-        .iter()
-        .map(|&u| {
-            let p = mesh.positions[u as usize];
-            [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]
+    Fit::new(mesh, v)?.hessian(f)
+}
+
+/// The part of the fit at a vertex that does not depend on the field: its samples and
+/// the factored (SVD) design matrix of their scaled offsets. A vertex fitted at many
+/// levels of the scale space factors it once; [`Fit::hessian`] then solves for each
+/// field, with the result [`hessian_at`] gives. About 3 KB a vertex.
+pub struct Fit {
+    samples: Vec<u32>,
+    scale: f64,
+    svd: SVD<f64, Dyn, Dyn>,
+}
+
+impl Fit {
+    /// The samples around `v` and their design matrix, factored; `None` when the
+    /// neighbourhood has fewer than 10 vertices even with the two-ring, or no extent.
+    pub fn new(mesh: &TetMesh, v: u32) -> Option<Fit> {
+        // `neighbours` includes the seeds: the one-ring plus `v`.
+        let mut samples = neighbours(mesh, &[v]);
+        if samples.len() < 11 {
+            samples = neighbours(mesh, &samples);
+        }
+        if samples.len() < 10 {
+            return None;
+        }
+        let centre = mesh.positions[v as usize];
+        let offsets: Vec<[f64; 3]> = samples
+            .iter()
+            .map(|&u| {
+                let p = mesh.positions[u as usize];
+                [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]
+            })
+            .collect();
+        let scale = offsets
+            .iter()
+            .map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt())
+            .fold(0.0, f64::max);
+        if !(scale > 0.0 && scale.is_finite()) {
+            return None;
+        }
+        Some(Fit {
+            svd: design(&offsets, scale).svd(true, true),
+            samples,
+            scale,
         })
-        .collect();
-    let scale = offsets
-        .iter()
-        .map(|d| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt())
-        .fold(0.0, f64::max);
-    if !(scale > 0.0 && scale.is_finite()) {
-        return None;
     }
-    let values: Vec<f64> = samples.iter().map(|&u| f[u as usize]).collect();
-    if values.iter().any(|x| !x.is_finite()) {
-        return None;
+
+    /// The Hessian of `f` at the vertex; `None` when a sample's value is not finite or
+    /// the fit fails.
+    pub fn hessian(&self, f: &[f64]) -> Option<Hessian> {
+        let values: Vec<f64> = self.samples.iter().map(|&u| f[u as usize]).collect();
+        if values.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        solve(&self.svd, &values, self.scale)
     }
-    fit(&offsets, &values, scale)
 }
 
 /// The unit normal of the least-squares plane through `points` about `center` (the
@@ -99,11 +128,10 @@ fn neighbours(mesh: &TetMesh, seeds: &[u32]) -> Vec<u32> {
     out
 }
 
-/// Least-squares quadratic through `(offset, value)` samples; `scale` normalises the
-/// offsets.
-fn fit(offsets: &[[f64; 3]], values: &[f64], scale: f64) -> Option<Hessian> {
-    let rows = offsets.len();
-    let a = DMatrix::from_fn(rows, 10, |i, j| {
+/// The least-squares design matrix of a quadratic in the offsets (scaled by `scale`):
+/// one row per sample, ten coefficients.
+fn design(offsets: &[[f64; 3]], scale: f64) -> DMatrix<f64> {
+    DMatrix::from_fn(offsets.len(), 10, |i, j| {
         let [x, y, z] = offsets[i].map(|c| c / scale);
         match j {
             0 => 1.0,
@@ -117,9 +145,15 @@ fn fit(offsets: &[[f64; 3]], values: &[f64], scale: f64) -> Option<Hessian> {
             8 => x * z,
             _ => y * z,
         }
-    });
+    })
+}
+
+/// The least-squares quadratic through the samples' `values`, given the SVD of their
+/// design matrix, and its Hessian (scaled back by `scale`).
+fn solve(svd: &SVD<f64, Dyn, Dyn>, values: &[f64], scale: f64) -> Option<Hessian> {
+    let rows = values.len();
     let b = DVector::from_column_slice(values);
-    let coefficients = a.svd(true, true).solve(&b, 1e-12).ok()?;
+    let coefficients = svd.solve(&b, 1e-12).ok()?;
     let c = |k: usize| coefficients[k];
     let s2 = scale * scale;
     let h = Matrix3::new(c(4), c(7), c(8), c(7), c(5), c(9), c(8), c(9), c(6)) / s2;

@@ -85,6 +85,7 @@ mod selection;
 pub mod smoothing;
 pub mod tracking;
 
+use std::collections::HashMap;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -100,7 +101,7 @@ pub use critical::{
     VertexType,
 };
 use hessian::plane_normal;
-pub use hessian::{hessian_at, Hessian};
+pub use hessian::{hessian_at, Fit, Hessian};
 pub use laplacian::{cotangent_stiffness, lumped_mass, SparseMatrix};
 pub use result::{
     Bar, MorseResult, MorseTimings, NormalSource, RejectReason, RejectedSaddle, Saddle, StepSummary,
@@ -301,6 +302,15 @@ struct Observation {
     hessian: Option<Hessian>,
 }
 
+/// What [`observe`] has gathered: per track, its saddle at every level it was seen
+/// at; and the fits of the last level's saddles, which a saddle still there at the
+/// next level takes again.
+#[derive(Default)]
+struct Observed {
+    by_track: Vec<Vec<Observation>>,
+    fits: HashMap<u32, Fit>,
+}
+
 /// The first vertex of a completion: one that closes an essential cycle at some level
 /// (a 2-saddle or a degenerate saddle, [`Closer`]) with no completion within the
 /// matching radius at the level before, and what it is cut with: the axis between the
@@ -395,7 +405,7 @@ pub fn analyze_with_progress(
     let mut reports = Vec::with_capacity(plan.len());
     let mut steps = Vec::new();
     let mut tracker = Tracker::new();
-    let mut observations: Vec<Vec<Observation>> = Vec::new();
+    let mut observed = Observed::default();
     let mut followed: Vec<Followed> = Vec::new();
     progress.start("smoothing and critical points", plan.len() as u64);
     let mut solved = plan.first().map(|p| solve(&mut solver, p.tau, &f));
@@ -426,7 +436,7 @@ pub fn analyze_with_progress(
                 &critical,
                 &roles.roles,
                 &tracker,
-                &mut observations,
+                &mut observed,
             );
             record_closings(
                 (mesh, &links, &sweep),
@@ -463,7 +473,7 @@ pub fn analyze_with_progress(
         Schedule::ScaleSpace => select_over_scales(
             mesh,
             &tracker.tracks,
-            &observations,
+            &observed.by_track,
             (&followed, plan.len()),
             options,
             &scale_of,
@@ -476,7 +486,7 @@ pub fn analyze_with_progress(
                 mesh,
                 &f,
                 &tracker.tracks,
-                &observations,
+                &observed.by_track,
                 min_persistence,
                 (options.track_radius, options.min_bulge),
                 &scale_of,
@@ -485,7 +495,7 @@ pub fn analyze_with_progress(
     };
     let bars = barcode(
         &tracker.tracks,
-        &observations,
+        &observed.by_track,
         &selection.saddles,
         &scale_of,
     );
@@ -638,8 +648,9 @@ fn observe(
     critical: &[CriticalPoint],
     roles: &[RoleAt],
     tracker: &Tracker,
-    observations: &mut Vec<Vec<Observation>>,
+    observed: &mut Observed,
 ) {
+    let fits = &mut observed.fits;
     let alive_here = |kind: VertexType| -> Vec<(u32, usize)> {
         let mut v: Vec<(u32, usize)> = tracker
             .tracks
@@ -658,12 +669,21 @@ fn observe(
             .ok()
             .map(|i| list[i].1)
     };
-    let found: Vec<(usize, Observation)> = critical
+    // A saddle observed at the last level too keeps its fit's factored matrix (most
+    // saddles live on: on tm_1002_tray_bottom's inside, 15 000 to 25 000 a level, and
+    // fitting them from scratch was a third of its run).
+    let found: Vec<(usize, Observation, Option<Fit>)> = critical
         .par_iter()
         .filter(|p| p.kind == VertexType::Saddle2)
         .filter_map(|p| {
             let track = track_of(&saddle_tracks, p.vertex)?;
             let role = roles[roles.binary_search_by_key(&p.vertex, |r| r.vertex).ok()?];
+            let fresh = if fits.contains_key(&p.vertex) {
+                None
+            } else {
+                Fit::new(mesh, p.vertex)
+            };
+            let fit = fresh.as_ref().or_else(|| fits.get(&p.vertex));
             Some((
                 track,
                 Observation {
@@ -674,17 +694,26 @@ fn observe(
                     value: f[p.vertex as usize],
                     role,
                     lobe: role.younger_max.and_then(|m| track_of(&maximum_tracks, m)),
-                    hessian: hessian_at(mesh, f, p.vertex),
+                    hessian: fit.and_then(|fit| fit.hessian(f)),
                 },
+                fresh,
             ))
         })
         .collect();
+    let observations = &mut observed.by_track;
     if observations.len() < tracker.tracks.len() {
         observations.resize(tracker.tracks.len(), Vec::new());
     }
-    for (track, observation) in found {
+    // The fits of this level's saddles, for the next.
+    let mut kept = HashMap::with_capacity(found.len());
+    for (track, observation, fresh) in found {
+        let v = observation.vertex;
+        if let Some(fit) = fresh.or_else(|| fits.remove(&v)) {
+            kept.insert(v, fit);
+        }
         observations[track].push(observation);
     }
+    *fits = kept;
 }
 
 fn check_inputs(mesh: &TetMesh, field: &[f64], options: &MorseOptions) -> Result<()> {

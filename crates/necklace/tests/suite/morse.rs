@@ -4,7 +4,7 @@
 
 use crate::common::Inside;
 use necklace::morse::{
-    analyze, classify, hessian_at, CriticalPoint, MorseOptions, MorseResult, NormalSource,
+    analyze, classify, hessian_at, CriticalPoint, Fit, MorseOptions, MorseResult, NormalSource,
     RejectReason, SaddleRole, Schedule, Tracker, VertexType,
 };
 use necklace::pipeline::{critical_points, surface_morse_expected};
@@ -276,12 +276,21 @@ fn one_vertex_link_gives_every_type() {
     }
 }
 
-#[test]
-fn the_hessian_fit_recovers_a_quadratic_exactly() {
+/// The mesh of a unit ball and its first interior vertex.
+fn a_ball_and_an_interior_vertex() -> (TetMesh, usize) {
     let shape = Shape::new(ShapeKind::Sphere);
     let mesh = stuff_volume(&Inside(shape), &StuffingOptions::new(0.15))
         .unwrap()
         .mesh;
+    let v = (0..mesh.num_vertices())
+        .find(|&v| mesh.kinds[v] == VertexKind::Interior)
+        .unwrap();
+    (mesh, v)
+}
+
+#[test]
+fn the_hessian_fit_recovers_a_quadratic_exactly() {
+    let (mesh, v) = a_ball_and_an_interior_vertex();
     // f = 3 + x − 2y + ½ (−2 x² − 1 y² + 4 z²) + 0.5 xz: a saddle-shaped Hessian.
     let f: Vec<f64> = mesh
         .positions
@@ -293,9 +302,6 @@ fn the_hessian_fit_recovers_a_quadratic_exactly() {
         })
         .collect();
     let h = [[-2.0, 0.0, 0.5], [0.0, -1.0, 0.0], [0.5, 0.0, 4.0]];
-    let v = (0..mesh.num_vertices())
-        .find(|&v| mesh.kinds[v] == VertexKind::Interior)
-        .unwrap();
     let fit = hessian_at(&mesh, &f, v as u32).unwrap();
     assert!(fit.samples >= 11);
     // Check H e = λ e for each fitted eigenpair, and the trace.
@@ -317,6 +323,30 @@ fn the_hessian_fit_recovers_a_quadratic_exactly() {
     ];
     for (fitted, exact) in fit.gradient.iter().zip(gradient) {
         assert!((fitted - exact).abs() < 1e-8, "{fit:?}");
+    }
+}
+
+#[test]
+fn one_factored_fit_serves_every_field_on_the_mesh() {
+    let (mesh, v) = a_ball_and_an_interior_vertex();
+    let v = v as u32;
+    let fit = Fit::new(&mesh, v).expect("an interior vertex has samples");
+    // Two quadratics with different Hessians (diagonal: their eigenvalues are the
+    // diagonal's, ascending), fitted with the one factored matrix.
+    for diagonal in [[-2.0, -1.0, 4.0], [3.0, -0.5, 1.5]] {
+        let f: Vec<f64> = mesh
+            .positions
+            .iter()
+            .map(|p| 1.0 - p[2] + 0.5 * (0..3).map(|k| diagonal[k] * p[k] * p[k]).sum::<f64>())
+            .collect();
+        let h = fit.hessian(&f).unwrap();
+        let mut expected = diagonal;
+        expected.sort_by(f64::total_cmp);
+        for (fitted, exact) in h.eigenvalues.iter().zip(expected) {
+            assert!((fitted - exact).abs() < 1e-8, "{h:?}");
+        }
+        // The same numbers as a fit from scratch.
+        assert_eq!(Some(h), hessian_at(&mesh, &f, v));
     }
 }
 
