@@ -12,6 +12,8 @@
 //! `last step alive − step born`. Everything is sequential or sorted, so the result does
 //! not depend on the thread count. Entry point: [`Tracker::advance`].
 
+use std::collections::HashMap;
+
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use serde::{Deserialize, Serialize};
 
@@ -194,6 +196,11 @@ impl Tracker {
 
 /// Match queries to targets one to one, closest pairs first (see [`close_pairs`]):
 /// the matched `(query, target)` pairs and which queries and targets were matched.
+///
+/// Most critical points stay at their vertex from one level to the next. A query at
+/// the very place of a target, where no other query and no other target is, takes
+/// that target first (the pair is at distance 0, and no other pair at distance 0 can
+/// claim either), so only the rest are searched; the matching is the same.
 fn greedy_matching(
     queries: &[([f64; 3], f64)],
     targets: &[[f64; 3]],
@@ -201,7 +208,43 @@ fn greedy_matching(
     let mut query_taken = vec![false; queries.len()];
     let mut target_taken = vec![false; targets.len()];
     let mut matches = Vec::new();
-    for (_, i, j) in close_pairs(queries, targets) {
+    // Places by their coordinates' bits (−0 made +0), with how many targets and
+    // queries are there and the last target seen.
+    let place = |p: [f64; 3]| {
+        p.iter()
+            .all(|x| x.is_finite())
+            .then(|| p.map(|x| (x + 0.0).to_bits()))
+    };
+    let mut at: HashMap<[u64; 3], (usize, usize, usize)> = HashMap::new();
+    for (j, &t) in targets.iter().enumerate() {
+        if let Some(key) = place(t) {
+            let entry = at.entry(key).or_insert((0, 0, j));
+            (entry.0, entry.2) = (entry.0 + 1, j);
+        }
+    }
+    for &(q, _) in queries {
+        if let Some(entry) = place(q).and_then(|key| at.get_mut(&key)) {
+            entry.1 += 1;
+        }
+    }
+    for (i, &(q, r)) in queries.iter().enumerate() {
+        if let Some(&(1, 1, j)) = place(q).and_then(|key| at.get(&key)) {
+            if r * r > 0.0 {
+                query_taken[i] = true;
+                target_taken[j] = true;
+                matches.push((i, j));
+            }
+        }
+    }
+    // The rest, closest pairs first.
+    let rest_queries: Vec<usize> = (0..queries.len()).filter(|&i| !query_taken[i]).collect();
+    let rest_targets: Vec<usize> = (0..targets.len()).filter(|&j| !target_taken[j]).collect();
+    let pairs = close_pairs(
+        &rest_queries.iter().map(|&i| queries[i]).collect::<Vec<_>>(),
+        &rest_targets.iter().map(|&j| targets[j]).collect::<Vec<_>>(),
+    );
+    for (_, a, b) in pairs {
+        let (i, j) = (rest_queries[a], rest_targets[b]);
         if !query_taken[i] && !target_taken[j] {
             query_taken[i] = true;
             target_taken[j] = true;
@@ -244,4 +287,81 @@ fn close_pairs(queries: &[([f64; 3], f64)], targets: &[[f64; 3]]) -> Vec<(f64, u
 
 fn distance2(a: [f64; 3], b: [f64; 3]) -> f64 {
     (0..3).map(|k| (a[k] - b[k]) * (a[k] - b[k])).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The greedy matching read literally: every pair within the query's radius,
+    /// closest first (then query, then target), each taken when both ends are free.
+    fn literal(queries: &[([f64; 3], f64)], targets: &[[f64; 3]]) -> Vec<(usize, usize)> {
+        let mut pairs = Vec::new();
+        for (i, &(q, r)) in queries.iter().enumerate() {
+            for (j, &t) in targets.iter().enumerate() {
+                let d2 = distance2(q, t);
+                if d2 <= r * r {
+                    pairs.push((d2, i, j));
+                }
+            }
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+        let (mut qt, mut tt) = (vec![false; queries.len()], vec![false; targets.len()]);
+        let mut matches = Vec::new();
+        for (_, i, j) in pairs {
+            if !qt[i] && !tt[j] {
+                (qt[i], tt[j]) = (true, true);
+                matches.push((i, j));
+            }
+        }
+        matches
+    }
+
+    #[test]
+    fn points_that_stay_put_match_as_the_literal_greedy_does() {
+        // Points on a coarse grid, so that many queries sit exactly on targets, some
+        // places hold two targets or two queries, and distances tie; −0 beside +0.
+        let mut state = 12345u64;
+        let mut next = |n: u64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) % n
+        };
+        for round in 0..50 {
+            let draws: Vec<u64> = (0..80 * 4).map(|_| next(20)).collect();
+            let coordinate = |d: u64| (d % 5) as f64 - 2.0;
+            let point = |k: usize| [0, 1, 2].map(|c| coordinate(draws[4 * k + c]));
+            let targets: Vec<[f64; 3]> = (0..40)
+                .map(|k| {
+                    let p = point(k);
+                    if k % 7 == 0 {
+                        p.map(|x| if x == 0.0 { -0.0 } else { x })
+                    } else {
+                        p
+                    }
+                })
+                .collect();
+            let queries: Vec<([f64; 3], f64)> = (40..80)
+                .map(|k| {
+                    (
+                        point(k),
+                        [0.0, 0.5, 1.0, 1.5][(draws[4 * k + 3] % 4) as usize],
+                    )
+                })
+                .collect();
+            let (matches, query_taken, target_taken) = greedy_matching(&queries, &targets);
+            let mut sorted = matches.clone();
+            sorted.sort_unstable();
+            let mut expected = literal(&queries, &targets);
+            expected.sort_unstable();
+            assert_eq!(sorted, expected, "round {round}");
+            for (i, taken) in query_taken.iter().enumerate() {
+                assert_eq!(*taken, matches.iter().any(|m| m.0 == i));
+            }
+            for (j, taken) in target_taken.iter().enumerate() {
+                assert_eq!(*taken, matches.iter().any(|m| m.1 == j));
+            }
+        }
+    }
 }
