@@ -263,16 +263,7 @@ fn close_pairs(queries: &[([f64; 3], f64)], targets: &[[f64; 3]]) -> Vec<(f64, u
     }
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(targets) else {
         // Only fails when there are more than u32::MAX targets; fall back to brute force.
-        for (i, &(q, r)) in queries.iter().enumerate() {
-            for (j, &t) in targets.iter().enumerate() {
-                let d2 = distance2(q, t);
-                if d2 <= r * r {
-                    pairs.push((d2, i, j));
-                }
-            }
-        }
-        pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-        return pairs;
+        return all_close_pairs(queries, targets);
     };
     for (i, &(q, r)) in queries.iter().enumerate() {
         let found = tree
@@ -280,6 +271,21 @@ fn close_pairs(queries: &[([f64; 3], f64)], targets: &[[f64; 3]]) -> Vec<(f64, u
             .within::<SquaredEuclidean<f64>>(r * r)
             .execute();
         pairs.extend(found.iter().map(|n| (n.distance, i, n.item as usize)));
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    pairs
+}
+
+/// [`close_pairs`] by brute force: every query against every target.
+fn all_close_pairs(queries: &[([f64; 3], f64)], targets: &[[f64; 3]]) -> Vec<(f64, usize, usize)> {
+    let mut pairs = Vec::new();
+    for (i, &(q, r)) in queries.iter().enumerate() {
+        for (j, &t) in targets.iter().enumerate() {
+            let d2 = distance2(q, t);
+            if d2 <= r * r {
+                pairs.push((d2, i, j));
+            }
+        }
     }
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
     pairs
@@ -293,19 +299,11 @@ fn distance2(a: [f64; 3], b: [f64; 3]) -> f64 {
 mod tests {
     use super::*;
 
-    /// The greedy matching read literally: every pair within the query's radius,
-    /// closest first (then query, then target), each taken when both ends are free.
+    /// The greedy matching read literally: every pair within the query's radius (by
+    /// brute force, not the k-d tree), closest first (then query, then target), each
+    /// taken when both ends are free.
     fn literal(queries: &[([f64; 3], f64)], targets: &[[f64; 3]]) -> Vec<(usize, usize)> {
-        let mut pairs = Vec::new();
-        for (i, &(q, r)) in queries.iter().enumerate() {
-            for (j, &t) in targets.iter().enumerate() {
-                let d2 = distance2(q, t);
-                if d2 <= r * r {
-                    pairs.push((d2, i, j));
-                }
-            }
-        }
-        pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+        let pairs = all_close_pairs(queries, targets);
         let (mut qt, mut tt) = (vec![false; queries.len()], vec![false; targets.len()]);
         let mut matches = Vec::new();
         for (_, i, j) in pairs {
