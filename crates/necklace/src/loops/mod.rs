@@ -472,6 +472,12 @@ struct Measures<'a> {
 }
 
 impl Measures<'_> {
+    /// A tightened loop's Z2 homology class.
+    fn class_of(&self, tightened: &Tightened) -> Vec<u64> {
+        let crossed = classes::crossings(self.surface, self.topology, &tightened.surface_points);
+        self.basis.class_of_crossings(crossed)
+    }
+
     /// A tightened loop with its class, the areas of its sides when it separates, and
     /// its opening.
     fn candidate(&self, tightened: Tightened, offset: f64, initial: Initial) -> Candidate {
@@ -721,6 +727,11 @@ fn turned(
 /// The shortest loop of `c`'s class over the parallel planes up to
 /// [`LoopOptions::slide_steps`] × [`LoopOptions::slide_step`] from the one that gave `c`
 /// (nearest first, + before −); `c` itself when none is shorter.
+///
+/// A plane's curve of another class is not tightened: tightening is a homotopy on the
+/// surface, so it keeps the curve's class (a parallel plane 4 % of the diagonal away
+/// can cut round a whole part, a long curve that is most of the tightening's work). The
+/// winner alone is measured (opening, areas), once.
 fn narrowest(
     surface: &SurfaceMesh,
     topology: &Topology,
@@ -746,6 +757,10 @@ fn narrowest(
         .map(|&offset| {
             let point = add(seed.position, scale(n, offset));
             let (_, curve) = around_point(surface, topology, &normals, point, seed.disk_only).0?;
+            let crossed = curve.crossings.iter().map(|x| x.edge as usize);
+            if measures.basis.class_of_crossings(crossed) != c.class {
+                return None;
+            }
             let t = tighten(
                 geometry,
                 &curve.crossings,
@@ -755,22 +770,25 @@ fn narrowest(
             tightened(t).ok()
         })
         .collect();
-    let mut best = c;
+    let mut best: Option<(f64, Tightened)> = None;
+    let (mut length, mut flatness) = (c.tightened.length, c.flatness);
     for (offset, t) in offsets.into_iter().zip(loops) {
         let Some(t) = t else { continue };
         // Shorter beyond round-off: the same geodesic reached again does not move it.
-        if t.length < best.tightened.length * (1.0 - 1e-6) {
-            let mut other = measures.candidate(t, offset, best.initial);
-            other.normal = best.normal;
-            if other.class == best.class {
-                other.flatness = best
-                    .flatness
-                    .map(|f| f * other.tightened.length / best.tightened.length);
-                best = other;
-            }
+        if t.length < length * (1.0 - 1e-6) && measures.class_of(&t) == c.class {
+            flatness = flatness.map(|f| f * t.length / length);
+            length = t.length;
+            best = Some((offset, t));
         }
     }
-    best
+    match best {
+        None => c,
+        Some((offset, t)) => Candidate {
+            normal: c.normal,
+            flatness,
+            ..measures.candidate(t, offset, c.initial)
+        },
+    }
 }
 
 /// The shortest closed curve around `point` over the planes through it with these

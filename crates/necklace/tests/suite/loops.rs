@@ -9,7 +9,7 @@ use necklace::loops::{
     find_loops, DropReason, Initial, LoopOptions, MembraneFailure, MembraneUse, NeckLoop, Role,
     Seed, SurfacePoint, TightenOptions, Tightened,
 };
-use necklace::mesh::Topology;
+use necklace::mesh::{HomologyBasis, Topology};
 use necklace::morse::NormalSource;
 use necklace::pipeline::{find_necks, NeckOptions, NeckReport};
 use necklace::shapes::{Shape, ShapeKind};
@@ -845,6 +845,57 @@ fn a_cycle_loop_slides_to_the_narrower_of_two_waists() {
         l.length
     );
     assert!(l.plane_offset < -0.05 && l.center[2] < 0.0, "{l:?}");
+}
+
+#[test]
+fn tightening_keeps_the_homology_class_of_the_curve_it_starts_from() {
+    // Tightening moves the loop across vertices of the surface, a homotopy: the Z2
+    // class of a plane's curve is the class of its geodesic (the narrowest-place search
+    // skips tightening a plane's curve of another class than the loop's on this).
+    let mesh = Shape::new(ShapeKind::Pretzel).mesh().unwrap();
+    let topology = Topology::new(&mesh);
+    let basis = HomologyBasis::new(&mesh, &topology);
+    let geometry = SurfaceGeometry::new(&mesh, &topology);
+    let (lo, hi) = mesh.bounding_box().unwrap();
+    let golden = PI * (3.0 - 5f64.sqrt());
+    let (mut essential, mut checked) = (0, 0);
+    for j in 0..24 {
+        // Normals over a hemisphere, origins along the box's diagonal.
+        let z = (j as f64 + 0.5) / 24.0;
+        let (r, phi) = ((1.0 - z * z).sqrt(), golden * j as f64);
+        let normal = [r * phi.cos(), r * phi.sin(), z];
+        let f = (j as f64 + 0.5) / 24.0;
+        let origin = [0, 1, 2].map(|k| lo[k] + f * (hi[k] - lo[k]));
+        let plane = Plane { origin, normal };
+        for curve in plane_cut(&mesh, &topology, &plane)
+            .into_iter()
+            .filter(|c| c.closed)
+        {
+            let before = basis.class_of_crossings(curve.crossings.iter().map(|c| c.edge as usize));
+            let t = tighten(
+                &geometry,
+                &curve.crossings,
+                &curve.faces,
+                &TightenOptions::default(),
+            );
+            if !matches!(t.status, TightenStatus::Converged | TightenStatus::Stalled) {
+                continue;
+            }
+            let crossed = necklace::loops::classes::crossings(&mesh, &topology, &t.surface_points);
+            let after = basis.class_of_crossings(crossed);
+            assert_eq!(
+                before, after,
+                "plane {j}: length {} → {}",
+                t.initial_length, t.length
+            );
+            checked += 1;
+            essential += usize::from(before.iter().any(|w| *w != 0));
+        }
+    }
+    assert!(
+        checked >= 30 && essential >= 25,
+        "{checked} loops, {essential} essential"
+    );
 }
 
 #[test]
