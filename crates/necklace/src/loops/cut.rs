@@ -9,7 +9,8 @@
 //! `(edge, t)` with the point `(1 − t)·a + t·b` for the edge's vertices `[a, b]` as stored
 //! by [`Topology`]; a vertex on the plane gives exactly `t = 0` or `t = 1`.
 //!
-//! Entry points: [`plane_cut`], [`loop_around`], [`encloses_another`].
+//! Entry points: [`plane_cut`] (or [`Cutter::cut`] with the surface's [`EdgeTree`]),
+//! [`loop_around`], [`encloses_another`].
 
 pub use crate::geom::plane_basis;
 use crate::geom::{dot, lerp, norm, sub};
@@ -70,22 +71,60 @@ pub fn closed_length(points: &[[f64; 3]]) -> f64 {
 }
 
 /// All curves where `plane` meets the surface. Closed curves on a closed manifold mesh;
-/// open curves where the surface has a boundary or non-manifold edge. `O(V + F)`.
+/// open curves where the surface has a boundary or non-manifold edge. `O(V + F)`;
+/// [`Cutter::cut`] gives the same curves visiting only the edges near the plane.
 pub fn plane_cut(mesh: &SurfaceMesh, topology: &Topology, plane: &Plane) -> Vec<CutCurve> {
-    let positive: Vec<bool> = mesh
-        .positions
-        .iter()
-        .map(|p| dot(plane.normal, sub(*p, plane.origin)) >= 0.0)
-        .collect();
-    let crossed = |e: usize| {
+    let all: Vec<u32> = (0..topology.num_edges() as u32).collect();
+    cut_edges(mesh, topology, plane, &all)
+}
+
+/// A surface with its edges in a bounding-box tree ([`EdgeTree`]), for plane cuts that
+/// cost what they cross: on a dense surface most planes cross a few hundred of its
+/// million edges.
+#[derive(Clone, Copy)]
+pub struct Cutter<'a> {
+    /// The surface.
+    pub mesh: &'a SurfaceMesh,
+    /// Its topology.
+    pub topology: &'a Topology,
+    /// Its edges' tree.
+    pub tree: &'a EdgeTree,
+}
+
+impl Cutter<'_> {
+    /// The curves of [`plane_cut`], in the same order, with the same crossings.
+    pub fn cut(&self, plane: &Plane) -> Vec<CutCurve> {
+        let mut near = Vec::new();
+        self.tree.near_plane(plane, &mut near);
+        near.sort_unstable();
+        cut_edges(self.mesh, self.topology, plane, &near)
+    }
+}
+
+/// The curves where `plane` meets the surface, found from `candidates`: edge indices in
+/// increasing order, among them every edge the plane crosses. Each curve starts at its
+/// crossed edge of lowest index, so any such list gives the same curves.
+fn cut_edges(
+    mesh: &SurfaceMesh,
+    topology: &Topology,
+    plane: &Plane,
+    candidates: &[u32],
+) -> Vec<CutCurve> {
+    let positive = |v: u32| dot(plane.normal, sub(mesh.positions[v as usize], plane.origin)) >= 0.0;
+    let is_crossed = |e: usize| {
         let [a, b] = topology.edges()[e];
-        positive[a as usize] != positive[b as usize]
+        positive(a) != positive(b)
     };
+    let crossed: Vec<u32> = candidates
+        .iter()
+        .copied()
+        .filter(|&e| is_crossed(e as usize))
+        .collect();
     // The crossed edge of face `f` other than `e` (exactly one by the side rule).
     let other_crossed = |f: usize, e: usize| {
         (0..3)
             .filter_map(|i| topology.face_edge(f, i))
-            .find(|&g| g != e && crossed(g))
+            .find(|&g| g != e && is_crossed(g))
     };
     let make = |e: usize| {
         let [a, b] = topology.edges()[e];
@@ -105,10 +144,14 @@ pub fn plane_cut(mesh: &SurfaceMesh, topology: &Topology, plane: &Plane) -> Vec<
         Crossing { edge: e as u32, t }
     };
 
-    let mut visited = vec![false; topology.num_edges()];
+    let mut visited = Visited {
+        crossed: &crossed,
+        seen: vec![false; crossed.len()],
+    };
     let mut curves = Vec::new();
-    for start in 0..topology.num_edges() {
-        if visited[start] || !crossed(start) {
+    for &start in &crossed {
+        let start = start as usize;
+        if visited.get(start) {
             continue;
         }
         // Walk one way; if the walk hits an open edge, walk the other way from `start` too.
@@ -134,6 +177,141 @@ pub fn plane_cut(mesh: &SurfaceMesh, topology: &Topology, plane: &Plane) -> Vec<
     curves
 }
 
+/// Which crossed edges a cut has walked: a flag per crossed edge (in increasing order).
+struct Visited<'a> {
+    crossed: &'a [u32],
+    seen: Vec<bool>,
+}
+
+impl Visited<'_> {
+    fn slot(&self, e: usize) -> usize {
+        self.crossed
+            .binary_search(&(e as u32))
+            .expect("a walk follows crossed edges only")
+    }
+
+    fn get(&self, e: usize) -> bool {
+        self.seen[self.slot(e)]
+    }
+
+    fn set(&mut self, e: usize) {
+        let i = self.slot(e);
+        self.seen[i] = true;
+    }
+}
+
+/// A surface's edges in a tree of bounding boxes (median splits along the widest
+/// axis), for the edges a plane may cross ([`Cutter`]). Built once per surface,
+/// `O(E log E)`.
+#[derive(Debug, Clone)]
+pub struct EdgeTree {
+    /// Flattened depth first: an inner node's left child follows it, its right child is
+    /// at `right`.
+    nodes: Vec<EdgeNode>,
+    /// Edge indices, each leaf's a run of them.
+    edges: Vec<u32>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct EdgeNode {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    /// Leaf: its first edge in `EdgeTree::edges`; inner: its right child's index.
+    first: u32,
+    /// Leaf: its number of edges; inner: 0.
+    count: u32,
+}
+
+/// Edges per leaf, at most.
+const LEAF_EDGES: usize = 8;
+
+impl EdgeTree {
+    /// The tree of `topology`'s edges on `mesh`.
+    pub fn new(mesh: &SurfaceMesh, topology: &Topology) -> EdgeTree {
+        let ends = topology.edges();
+        let mut tree = EdgeTree {
+            nodes: Vec::with_capacity(2 * ends.len() / LEAF_EDGES + 1),
+            edges: (0..ends.len() as u32).collect(),
+        };
+        if !ends.is_empty() {
+            tree.build(mesh, ends, 0, ends.len());
+        }
+        tree
+    }
+
+    /// Adds the node over `edges[from..to]` and its subtree.
+    fn build(&mut self, mesh: &SurfaceMesh, ends: &[[u32; 2]], from: usize, to: usize) {
+        let at = |v: u32| mesh.positions[v as usize];
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for &e in &self.edges[from..to] {
+            for p in ends[e as usize].map(at) {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+        }
+        let node = self.nodes.len();
+        self.nodes.push(EdgeNode {
+            lo,
+            hi,
+            first: from as u32,
+            count: (to - from) as u32,
+        });
+        if to - from <= LEAF_EDGES {
+            return;
+        }
+        let axis = (0..3)
+            .max_by(|&i, &j| (hi[i] - lo[i]).total_cmp(&(hi[j] - lo[j])))
+            .unwrap_or(0);
+        // Twice the edge's midpoint along the axis.
+        let centre = |e: u32| {
+            let [a, b] = ends[e as usize];
+            at(a)[axis] + at(b)[axis]
+        };
+        let mid = (from + to) / 2;
+        self.edges[from..to].select_nth_unstable_by(mid - from, |&a, &b| {
+            centre(a).total_cmp(&centre(b)).then(a.cmp(&b))
+        });
+        self.nodes[node].count = 0;
+        self.build(mesh, ends, from, mid);
+        self.nodes[node].first = self.nodes.len() as u32;
+        self.build(mesh, ends, mid, to);
+    }
+
+    /// Appends every edge whose box the plane may meet: a superset of the edges it
+    /// crosses (the box test is widened by far more than the rounding of the side test).
+    fn near_plane(&self, plane: &Plane, out: &mut Vec<u32>) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let n = plane.normal;
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            let node = self.nodes[i];
+            // Signed distance of the box's centre, and the reach of its half extents.
+            let (mut d, mut r, mut size) = (0.0, 0.0, 0.0);
+            for (k, nk) in n.iter().enumerate() {
+                let c = 0.5 * (node.lo[k] + node.hi[k]) - plane.origin[k];
+                let e = 0.5 * (node.hi[k] - node.lo[k]);
+                d += nk * c;
+                r += nk.abs() * e;
+                size += nk.abs() * (c.abs() + e);
+            }
+            if d.abs() > r + 1e-9 * size {
+                continue;
+            }
+            if node.count > 0 {
+                let first = node.first as usize;
+                out.extend_from_slice(&self.edges[first..first + node.count as usize]);
+            } else {
+                stack.push(node.first as usize);
+                stack.push(i + 1);
+            }
+        }
+    }
+}
+
 /// Follow crossed edges from `start` leaving through its `side`-th face. Returns the
 /// edges (starting with `start`), the faces between them, and whether the walk closed.
 fn walk(
@@ -141,11 +319,11 @@ fn walk(
     side: usize,
     topology: &Topology,
     other_crossed: &impl Fn(usize, usize) -> Option<usize>,
-    visited: &mut [bool],
+    visited: &mut Visited,
 ) -> (Vec<usize>, Vec<u32>, bool) {
     let mut edges = vec![start];
     let mut faces = Vec::new();
-    visited[start] = true;
+    visited.set(start);
     let start_faces = topology.edge_faces(start);
     if start_faces.len() != 2 || side >= start_faces.len() {
         return (edges, faces, false);
@@ -160,11 +338,11 @@ fn walk(
         if next == start {
             return (edges, faces, true);
         }
-        if visited[next] {
+        if visited.get(next) {
             // Only possible through a non-manifold fan; stop rather than loop forever.
             return (edges, faces, false);
         }
-        visited[next] = true;
+        visited.set(next);
         edges.push(next);
         let ef = topology.edge_faces(next);
         if ef.len() != 2 {

@@ -85,7 +85,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::geom::{add, norm, scale};
 use crate::mesh::{HomologyBasis, Side, SurfaceMesh, Topology};
 use crate::progress::{Progress, Silent};
-use cut::{closed_length, encloses_another, loop_around, plane_basis, plane_cut, Plane};
+use cut::{closed_length, encloses_another, loop_around, plane_basis, Cutter, Plane};
 use membrane::membrane_loop;
 pub use membrane::{MembraneFailure, MembraneOptions};
 use opening::Openings;
@@ -287,9 +287,10 @@ pub fn find_loops_with_progress(
 
     let start = Instant::now();
     let prepared = LoopSurface::new(surface);
-    let (topology, basis) = (&prepared.topology, &prepared.basis);
+    let basis = &prepared.basis;
     let geometry = prepared.geometry(surface);
     let measures = prepared.measures(surface, options);
+    let cutter = prepared.cutter(surface);
     let distance = LazyDistance {
         surface,
         given: distance,
@@ -303,7 +304,8 @@ pub fn find_loops_with_progress(
         .par_iter()
         .map(|seed| {
             let measured = |s: Start| {
-                let mut c = measures.candidate(s.tightened, s.offset, s.initial);
+                let mut c =
+                    measures.candidate(s.tightened, s.offset, s.initial, seed.needs_opening);
                 c.sources = s.sources;
                 c.normal = s.normal;
                 // The inscribed radius at the saddle: the exact distance there.
@@ -312,13 +314,12 @@ pub fn find_loops_with_progress(
                     .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
                 c
             };
-            let outcome = loop_from_seed(surface, topology, &geometry, &distance, seed, options)
+            let outcome = loop_from_seed(&cutter, &geometry, &distance, seed, options)
                 .map(measured)
                 .map(|c| {
                     let separates = c.class.iter().all(|w| *w == 0);
                     if separates && seed.role == Some(Role::CycleClosing) {
-                        turned(surface, topology, &geometry, &measures, seed, options)
-                            .map_or(c, measured)
+                        turned(&cutter, &geometry, &measures, seed, options).map_or(c, measured)
                     } else {
                         c
                     }
@@ -354,16 +355,14 @@ pub fn find_loops_with_progress(
         .into_par_iter()
         .map(|(i, c)| {
             let c = if seeds[i].role == Some(Role::CycleClosing) {
-                narrowest(
-                    surface, topology, &geometry, &measures, &seeds[i], c, options,
-                )
+                narrowest(&cutter, &geometry, &measures, &seeds[i], c, options)
             } else {
                 c
             };
             (i, c)
         })
         .collect();
-    let loops = select(
+    let mut loops = select(
         surface,
         seeds,
         kind,
@@ -372,6 +371,18 @@ pub fn find_loops_with_progress(
         basis.len(),
         &mut dropped,
     );
+    // Openings are measured where selection reads them (`Seed::needs_opening`), and
+    // for the loops kept: most candidates are dropped, and a long one's band is wide.
+    let openings: Vec<Option<[f64; 2]>> = loops
+        .par_iter()
+        .map(|l| match l.opening {
+            None if !seeds[l.seed].needs_opening => measures.opening(l),
+            measured => measured,
+        })
+        .collect();
+    for (l, opening) in loops.iter_mut().zip(openings) {
+        l.opening = opening;
+    }
     dropped.sort_by_key(|d| d.seed);
     let selection = start.elapsed().as_secs_f64();
 
@@ -472,6 +483,28 @@ struct Measures<'a> {
 }
 
 impl Measures<'_> {
+    /// How the surface opens out on the sides of a kept loop (module [`opening`]).
+    fn opening(&self, l: &NeckLoop) -> Option<[f64; 2]> {
+        let crossed = classes::crossings(self.surface, self.topology, &l.surface_points);
+        self.opening_of(&l.surface_points, &l.points, l.length, &crossed)
+    }
+
+    /// The opening of a loop through `points` (at `positions`), of this `length`, that
+    /// crosses the edges `crossed`, measured out to [`LoopOptions::opening_reach`] × its
+    /// radius.
+    fn opening_of(
+        &self,
+        points: &[SurfacePoint],
+        positions: &[[f64; 3]],
+        length: f64,
+        crossed: &[usize],
+    ) -> Option<[f64; 2]> {
+        let reach = self.reach * (length / (2.0 * std::f64::consts::PI));
+        let (surface, topology) = (self.surface, self.topology);
+        self.openings
+            .of_loop(surface, topology, points, positions, crossed, reach)
+    }
+
     /// A tightened loop's Z2 homology class.
     fn class_of(&self, tightened: &Tightened) -> Vec<u64> {
         let crossed = classes::crossings(self.surface, self.topology, &tightened.surface_points);
@@ -479,8 +512,15 @@ impl Measures<'_> {
     }
 
     /// A tightened loop with its class, the areas of its sides when it separates, and
-    /// its opening.
-    fn candidate(&self, tightened: Tightened, offset: f64, initial: Initial) -> Candidate {
+    /// (with `opening`) its opening; else that is left `None`, for [`Measures::opening`]
+    /// once the loop is kept.
+    fn candidate(
+        &self,
+        tightened: Tightened,
+        offset: f64,
+        initial: Initial,
+        opening: bool,
+    ) -> Candidate {
         let (surface, topology) = (self.surface, self.topology);
         let crossed = classes::crossings(surface, topology, &tightened.surface_points);
         let class = self.basis.class_of_crossings(crossed.iter().copied());
@@ -489,15 +529,12 @@ impl Measures<'_> {
             .all(|w| *w == 0)
             .then(|| classes::sides(surface, topology, &tightened.surface_points, &crossed))
             .flatten();
-        let radius = tightened.length / (2.0 * std::f64::consts::PI);
-        let opening = self.openings.of_loop(
-            surface,
-            topology,
-            &tightened.surface_points,
-            &tightened.points,
-            &crossed,
-            self.reach * radius,
-        );
+        let opening = opening
+            .then(|| {
+                let (points, positions) = (&tightened.surface_points, &tightened.points);
+                self.opening_of(points, positions, tightened.length, &crossed)
+            })
+            .flatten();
         Candidate {
             tightened,
             offset,
@@ -550,13 +587,13 @@ impl LazyDistance<'_> {
 /// plane or the membrane gave it. Order: the plane through the saddle, then (where
 /// membranes are used) the membrane, then the parallel planes nearest first.
 fn loop_from_seed(
-    surface: &SurfaceMesh,
-    topology: &Topology,
+    cutter: &Cutter,
     geometry: &SurfaceGeometry,
     distance: &LazyDistance<'_>,
     seed: &Seed,
     options: &LoopOptions,
 ) -> std::result::Result<Start, DropReason> {
+    let (surface, topology) = (cutter.mesh, cutter.topology);
     let (n, normals) = cutting_normals(seed, options);
     let membrane = || {
         membrane_loop(
@@ -604,7 +641,7 @@ fn loop_from_seed(
     let mut failure = None;
     for offset in offsets {
         let point = add(seed.position, scale(n, offset));
-        let best = around_point(surface, topology, &normals, point, seed.disk_only);
+        let best = around_point(cutter, &normals, point, seed.disk_only);
         if offset == 0.0 {
             (closed, open) = (best.1, best.2);
         }
@@ -658,13 +695,13 @@ fn loop_from_seed(
 /// and tightened shortest first, until one keeps a non-zero class; `None` when none
 /// does.
 fn turned(
-    surface: &SurfaceMesh,
-    topology: &Topology,
+    cutter: &Cutter,
     geometry: &SurfaceGeometry,
     measures: &Measures,
     seed: &Seed,
     options: &LoopOptions,
 ) -> Option<Start> {
+    let (surface, topology) = (cutter.mesh, cutter.topology);
     /// Tightened at most this many of the shortest essential curves.
     const TRIED: usize = 4;
     let k = options.turned_planes;
@@ -684,7 +721,7 @@ fn turned(
                 origin: seed.position,
                 normal,
             };
-            let mut cut = plane_cut(surface, topology, &plane);
+            let mut cut = cutter.cut(&plane);
             let i = loop_around(surface, topology, &plane, &cut, seed.position)?;
             if encloses_another(surface, topology, &plane, &cut, i) {
                 return None;
@@ -733,14 +770,14 @@ fn turned(
 /// can cut round a whole part, a long curve that is most of the tightening's work). The
 /// winner alone is measured (opening, areas), once.
 fn narrowest(
-    surface: &SurfaceMesh,
-    topology: &Topology,
+    cutter: &Cutter,
     geometry: &SurfaceGeometry,
     measures: &Measures,
     seed: &Seed,
     c: Candidate,
     options: &LoopOptions,
 ) -> Candidate {
+    let surface = cutter.mesh;
     let (n, normals) = match c.initial {
         Initial::TurnedPlane => (c.normal, vec![c.normal]),
         Initial::Plane | Initial::Membrane => cutting_normals(seed, options),
@@ -756,7 +793,7 @@ fn narrowest(
         .par_iter()
         .map(|&offset| {
             let point = add(seed.position, scale(n, offset));
-            let (_, curve) = around_point(surface, topology, &normals, point, seed.disk_only).0?;
+            let (_, curve) = around_point(cutter, &normals, point, seed.disk_only).0?;
             let crossed = curve.crossings.iter().map(|x| x.edge as usize);
             if measures.basis.class_of_crossings(crossed) != c.class {
                 return None;
@@ -786,7 +823,7 @@ fn narrowest(
         Some((offset, t)) => Candidate {
             normal: c.normal,
             flatness,
-            ..measures.candidate(t, offset, c.initial)
+            ..measures.candidate(t, offset, c.initial, seed.needs_opening)
         },
     }
 }
@@ -796,12 +833,12 @@ fn narrowest(
 /// `disk_only`, a curve with another one inside it is passed over ([`Seed::disk_only`]),
 /// and counted in the last number.
 fn around_point(
-    surface: &SurfaceMesh,
-    topology: &Topology,
+    cutter: &Cutter,
     normals: &[[f64; 3]],
     point: [f64; 3],
     disk_only: bool,
 ) -> (Option<(f64, cut::CutCurve)>, usize, usize, usize) {
+    let (surface, topology) = (cutter.mesh, cutter.topology);
     let mut best: Option<(f64, cut::CutCurve)> = None;
     let (mut closed, mut open, mut not_disks) = (0, 0, 0);
     for (j, &normal) in normals.iter().enumerate() {
@@ -809,7 +846,7 @@ fn around_point(
             origin: point,
             normal,
         };
-        let mut curves = plane_cut(surface, topology, &plane);
+        let mut curves = cutter.cut(&plane);
         if j == 0 {
             closed = curves.iter().filter(|c| c.closed).count();
             open = curves.len() - closed;

@@ -3,13 +3,14 @@
 //! the pipeline for the input when loops found on a simplified copy are carried back
 //! ([`transfer_loops`](super::transfer_loops)).
 
+use super::cut::{Cutter, EdgeTree};
 use super::opening::Openings;
 use super::tighten::SurfaceGeometry;
 use super::{LoopOptions, Measures};
 use crate::mesh::{HomologyBasis, SurfaceMesh, Topology};
 
 /// What the loop stage keeps of a surface between seeds: its topology, homology basis
-/// and angle defects. Built once per surface ([`LoopSurface::new`]); the pipeline
+/// angle defects and edge tree. Built once per surface ([`LoopSurface::new`]); the pipeline
 /// builds one for the input surface when loops found on a simplified copy are carried
 /// back to it ([`transfer_loops`](super::transfer_loops)).
 /// It does not hold the surface: each use names it again, and must name the same one
@@ -18,6 +19,8 @@ pub struct LoopSurface {
     pub(super) topology: Topology,
     pub(super) basis: HomologyBasis,
     openings: Openings,
+    /// Its edges' tree, for plane cuts.
+    edges: EdgeTree,
     /// The total angle at each vertex ([`SurfaceGeometry::total_angles`]).
     angles: Vec<f64>,
 }
@@ -32,10 +35,12 @@ impl LoopSurface {
         let basis = HomologyBasis::new(surface, &topology);
         let openings = Openings::new(surface, &topology, &geometry);
         let angles = geometry.total_angles().to_vec();
+        let edges = EdgeTree::new(surface, &topology);
         LoopSurface {
             topology,
             basis,
             openings,
+            edges,
             angles,
         }
     }
@@ -49,6 +54,15 @@ impl LoopSurface {
     /// What tightening needs of `surface`, the surface this was built from.
     pub(super) fn geometry<'a>(&'a self, surface: &'a SurfaceMesh) -> SurfaceGeometry<'a> {
         SurfaceGeometry::with_angles(surface, &self.topology, self.angles.clone())
+    }
+
+    /// Plane cuts of `surface`, the surface this was built from.
+    pub(super) fn cutter<'a>(&'a self, surface: &'a SurfaceMesh) -> Cutter<'a> {
+        Cutter {
+            mesh: surface,
+            topology: &self.topology,
+            tree: &self.edges,
+        }
     }
 
     /// What loops on `surface`, the surface this was built from, are measured with.

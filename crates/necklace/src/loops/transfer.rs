@@ -119,6 +119,7 @@ pub fn transfer_loops(
     }
     let geometry = to.geometry(surface);
     let measures = to.measures(surface, options);
+    let cutter = to.cutter(surface);
     let carried: Vec<std::result::Result<NeckLoop, DropReason>> = found
         .loops
         .par_iter()
@@ -130,7 +131,7 @@ pub fn transfer_loops(
                 let start = match (way, l.initial) {
                     (Way::Same, Initial::Plane) => {
                         let point = add(seed.position, scale(n, l.plane_offset));
-                        around_point(surface, &to.topology, &normals, point, seed.disk_only)
+                        around_point(&cutter, &normals, point, seed.disk_only)
                             .0
                             .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
                     }
@@ -150,7 +151,7 @@ pub fn transfer_loops(
                     (Way::Traced, _) => traced(surface, &to.topology, distance, &l.points, options)
                         .map(|(crossings, faces)| (crossings, faces, Vec::new())),
                     (Way::LoopPlane, _) => {
-                        around_point(surface, &to.topology, &[l.normal], l.center, seed.disk_only)
+                        around_point(&cutter, &[l.normal], l.center, seed.disk_only)
                             .0
                             .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
                     }
@@ -165,7 +166,7 @@ pub fn transfer_loops(
                     other = Some(t.length);
                     continue;
                 }
-                let mut c = measures.candidate(t, l.plane_offset, l.initial);
+                let mut c = measures.candidate(t, l.plane_offset, l.initial, true);
                 c.sources = sources;
                 let inscribed = distance.distance(seed.position);
                 c.flatness = (inscribed > 0.0)

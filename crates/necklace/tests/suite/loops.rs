@@ -3,7 +3,7 @@
 
 use std::f64::consts::PI;
 
-use necklace::loops::cut::{closed_length, loop_around, plane_cut, Plane};
+use necklace::loops::cut::{closed_length, loop_around, plane_cut, Cutter, EdgeTree, Plane};
 use necklace::loops::tighten::{tighten, SurfaceGeometry, TightenStatus};
 use necklace::loops::{
     find_loops, DropReason, Initial, LoopOptions, MembraneFailure, MembraneUse, NeckLoop, Role,
@@ -913,6 +913,49 @@ fn plane_cuts_through_vertices_still_give_closed_curves() {
     assert!(curves[0].closed);
     let ring = 2.0 * 16.0 * waist(z) * (PI / 16.0).sin();
     assert!((closed_length(&curves[0].points(&mesh, &topology)) - ring).abs() < 1e-9);
+}
+
+#[test]
+fn a_cut_through_the_edge_tree_gives_the_curves_of_the_whole_surface_cut() {
+    // The tree only narrows the edges looked at: the same curves, in the same order,
+    // with the same crossings, also for planes through whole rings of vertices (the
+    // revolution's rings lie exactly on z = ±k·h) and for planes that miss the surface.
+    let golden = PI * (3.0 - 5f64.sqrt());
+    for mesh in [
+        revolution(waist, 1.0, 20, 16),
+        Shape::new(ShapeKind::Pretzel).mesh().unwrap(),
+    ] {
+        let topology = Topology::new(&mesh);
+        let tree = EdgeTree::new(&mesh, &topology);
+        let cutter = Cutter {
+            mesh: &mesh,
+            topology: &topology,
+            tree: &tree,
+        };
+        let (lo, hi) = mesh.bounding_box().unwrap();
+        let mut planes: Vec<Plane> = (0..=20)
+            .map(|k| Plane {
+                origin: [0.0, 0.0, -1.0 + 0.1 * k as f64],
+                normal: [0.0, 0.0, 1.0],
+            })
+            .collect();
+        planes.extend((0..40).map(|j| {
+            let z = (j as f64 + 0.5) / 40.0;
+            let (r, phi) = ((1.0 - z * z).sqrt(), golden * j as f64);
+            let f = -0.2 + 1.4 * j as f64 / 39.0;
+            Plane {
+                origin: [0, 1, 2].map(|k| lo[k] + f * (hi[k] - lo[k])),
+                normal: [r * phi.cos(), r * phi.sin(), z],
+            }
+        }));
+        let mut crossed = 0;
+        for plane in &planes {
+            let whole = plane_cut(&mesh, &topology, plane);
+            assert_eq!(cutter.cut(plane), whole, "{plane:?}");
+            crossed += whole.len();
+        }
+        assert!(crossed >= 40, "{crossed} curves");
+    }
 }
 
 #[test]
