@@ -199,6 +199,9 @@ pub struct StuffingStats {
     pub spacing_floor: Option<f64>,
     /// The tet count estimated from the octree before meshing.
     pub estimated_tets: usize,
+    /// Meshings the budget's floor search tried, the last the one kept (1 where the
+    /// first fitted; a tree the calibration built and found over counts too).
+    pub attempts: usize,
     /// Octree leaves.
     pub octree_leaves: usize,
     /// Background lattice vertices and tets.
@@ -294,8 +297,10 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     // The calibration's tree at that floor over the budget is the first attempt's
     // failure: it would build the same tree again.
     let mut known_failure = over;
+    let mut attempts = 0;
     let (lattice, features) = loop {
         let clamped = clamp_spacing(&features, floor);
+        attempts += 1;
         let attempt = match known_failure.take() {
             Some(failed) => Err(failed),
             None => stuff_lattice(domain, options, &clamped, lo, hi),
@@ -305,6 +310,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             Err(Failed::OverBudget {
                 estimate,
                 truncations,
+                expected_fit,
                 error,
             }) => {
                 if floor.is_some_and(|f| f >= h) || clamped.is_empty() {
@@ -324,7 +330,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
                     .map(|t| t.size)
                     .reduce(f64::min);
                 let fits = fits.filter(|&fits| fits > finest);
-                floor = Some(match (stopped, fits) {
+                let next = match (stopped, fits) {
                     // The finer of the two: a floor whose tree was built and fitted is
                     // known to fit; the level only estimated to.
                     (Some(stopped), fits) => fits.map_or(stopped, |fits| stopped.min(fits)),
@@ -346,6 +352,13 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
                         let excess = estimate / options.max_tets() as f64;
                         (finest * excess.sqrt().max(1.25) * 1.1).min(h)
                     }
+                };
+                // Floors below the level the failed mesh's own count says fits build
+                // trees as much over: where features finer than that cover little (the
+                // zero-width gaps at a crossing), the steps above would try each.
+                floor = Some(match expected_fit {
+                    Some(level) => next.max(fits.map_or(level, |fits| level.min(fits))),
+                    None => next,
                 });
             }
             Err(failed) => return Err(failed.error()),
@@ -454,6 +467,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
             sizing_features: features.len(),
             spacing_floor: floor,
             estimated_tets: tree.estimated_tets,
+            attempts,
             octree_leaves: tree.leaves,
             background_vertices: keys.len(),
             background_tets,
@@ -585,12 +599,16 @@ fn stuff_lattice(
     );
     lap(3);
     if stuffed.tets.len() > options.max_tets() {
-        return Err(over_budget(
+        let mut failed = over_budget(
             stuffed.tets.len() as f64,
             Vec::new(),
             options,
             grid.finest_cell(&tree.octree),
-        ));
+        );
+        if let Failed::OverBudget { expected_fit, .. } = &mut failed {
+            *expected_fit = expected_fit_level(&tree.truncations, stuffed.tets.len(), options);
+        }
+        return Err(failed);
     }
     Ok(Lattice {
         grid,
@@ -693,6 +711,41 @@ struct Tree {
     centre_values: HashMap<Key, f64>,
     leaves: usize,
     estimated_tets: usize,
+    /// The tree stopped at each level (the last is the whole tree, before balance).
+    truncations: Vec<Truncation>,
+}
+
+/// Where the stuffing of a tree that fitted the budget was over it: the finest level at
+/// which that tree, stopped there, fits, its levels' estimates scaled to the tets the
+/// stuffing gave ([`scaled_to`]). `None` where no level below `h` fits.
+fn expected_fit_level(
+    truncations: &[Truncation],
+    stuffed: usize,
+    options: &StuffingOptions,
+) -> Option<f64> {
+    scaled_to(truncations, stuffed as f64)
+        .iter()
+        .filter(|t| t.size <= options.h && t.estimated_tets <= options.max_tets() as f64)
+        .map(|t| t.size)
+        .reduce(f64::min)
+}
+
+/// A whole tree's levels ([`Truncation`]s, the last the whole tree before the 2:1
+/// balance) with their estimates scaled so that the last counts `total`: what the
+/// balance, or the stuffing, added to the whole is taken to add to every level in the
+/// same proportion. Unscaled where the last estimates nothing.
+fn scaled_to(truncations: &[Truncation], total: f64) -> Vec<Truncation> {
+    let ratio = truncations
+        .last()
+        .filter(|t| t.estimated_tets > 0.0)
+        .map_or(1.0, |t| total / t.estimated_tets);
+    truncations
+        .iter()
+        .map(|t| Truncation {
+            estimated_tets: t.estimated_tets * ratio,
+            ..*t
+        })
+        .collect()
 }
 
 /// A meshing attempt that failed: over the budget (with the estimate that was), or for
@@ -703,6 +756,9 @@ enum Failed {
         /// What the tree would have been, stopped at each level it built (empty
         /// where the stuffing, not the tree, was over).
         truncations: Vec<Truncation>,
+        /// Where the stuffing was over: the finest level of its tree expected to fit
+        /// ([`expected_fit_level`]).
+        expected_fit: Option<f64>,
         error: Error,
     },
     Other(Error),
@@ -743,6 +799,7 @@ fn over_budget(
     Failed::OverBudget {
         estimate,
         truncations,
+        expected_fit: None,
         error: Error::new(
             ErrorKind::OverBudget,
             format!(
@@ -942,9 +999,12 @@ fn build_octree(
             .unwrap_or(grid.root.size),
     );
     if estimated_tets > options.max_tets() {
+        // The balance added cells round the finest ones: the levels are taken to grow
+        // in the same proportion, so that a floor at a level still over is not tried
+        // (`docs/decisions.md`, Volume mesh).
         return Err(over_budget(
             estimated_tets as f64,
-            count.truncations,
+            scaled_to(&count.truncations, estimated_tets as f64),
             options,
             finest,
         ));
@@ -955,6 +1015,7 @@ fn build_octree(
         dead,
         centre_values,
         estimated_tets,
+        truncations: count.truncations,
     })
 }
 
@@ -1127,6 +1188,44 @@ mod tests {
             "finest cell {finest}, level that fits {}",
             fitting.size
         );
+    }
+
+    #[test]
+    fn a_stuffing_over_the_budget_expects_a_fit_where_its_own_count_scaled_says() {
+        // Levels of a tree whose estimate undercounted: the stuffing gave 20 000 tets
+        // where its finest level estimated 16 000 (a quarter more at every level).
+        let options = StuffingOptions {
+            max_memory: (10_000.0 * BYTES_PER_TET) as u64,
+            ..StuffingOptions::new(0.5)
+        };
+        let levels = [
+            (1.0, 300.0),
+            (0.5, 1_000.0),
+            (0.25, 4_000.0),
+            (0.125, 16_000.0),
+        ]
+        .map(|(size, estimated_tets)| Truncation {
+            size,
+            estimated_tets,
+        });
+        // 0.25 scales to 5 000 (fits), 0.125 to 20 000 (over); 1.0 is above h.
+        assert_eq!(expected_fit_level(&levels, 20_000, &options), Some(0.25));
+        // A stuffing that gave half the estimate fits at the finest level.
+        assert_eq!(expected_fit_level(&levels, 8_000, &options), Some(0.125));
+        // Where no level below h fits, none is named.
+        assert_eq!(expected_fit_level(&levels, 1_000_000, &options), None);
+        assert_eq!(expected_fit_level(&[], 20_000, &options), None);
+        // The balance's share (a tree built whole that counts twice its last level)
+        // goes to every level alike.
+        let scaled = scaled_to(&levels, 32_000.0);
+        for (t, s) in levels.iter().zip(&scaled) {
+            assert_eq!((s.size, s.estimated_tets), (t.size, 2.0 * t.estimated_tets));
+        }
+        let empty = [0.5, 0.25].map(|size| Truncation {
+            size,
+            estimated_tets: 0.0,
+        });
+        assert_eq!(scaled_to(&empty, 1_000.0)[1].estimated_tets, 0.0);
     }
 
     #[test]
