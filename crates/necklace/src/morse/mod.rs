@@ -106,7 +106,7 @@ pub use laplacian::{cotangent_stiffness, lumped_mass, SparseMatrix};
 pub use result::{
     Bar, MorseResult, MorseTimings, NormalSource, RejectReason, RejectedSaddle, Saddle, StepSummary,
 };
-pub use roles::{Closer, RoleAt, Roles, SaddleRole, Sweep};
+pub use roles::{Closer, CycleSearch, RoleAt, Roles, SaddleRole, Sweep};
 use selection::{barcode, select_at_last_step, select_over_scales};
 pub use smoothing::{implicit_step, HeatSolver, Preconditioner, SolverOptions, StepReport};
 pub use tracking::{CriticalPoint, StepEvents, Track, Tracker};
@@ -599,7 +599,7 @@ fn record_closings(
     }
     let fresh: Vec<Followed> = fresh
         .into_par_iter()
-        .filter_map(|(c, radius)| {
+        .map_init(CycleSearch::default, |search, (c, radius)| {
             let v = c.vertex as usize;
             let first = Closing {
                 step,
@@ -609,7 +609,7 @@ fn record_closings(
                 axis: links.upper_axis(v, f, &mesh.positions, c.through)?,
                 hessian: hessian_at(mesh, f, c.vertex)?,
                 cycle_normal: sweep
-                    .cycle_through(c, f, CYCLE_SEARCH_LIMIT)
+                    .cycle_through(c, f, CYCLE_SEARCH_LIMIT, search)
                     .and_then(|path| cycle_normal(&mesh.positions, &path)),
             };
             Some(Followed {
@@ -620,6 +620,7 @@ fn record_closings(
                 seen: 1,
             })
         })
+        .flatten()
         .collect();
     followed.extend(fresh);
 }

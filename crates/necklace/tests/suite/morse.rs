@@ -4,8 +4,8 @@
 
 use crate::common::Inside;
 use necklace::morse::{
-    analyze, classify, hessian_at, CriticalPoint, Fit, MorseOptions, MorseResult, NormalSource,
-    RejectReason, SaddleRole, Schedule, Tracker, VertexType,
+    analyze, classify, hessian_at, CriticalPoint, CycleSearch, Fit, MorseOptions, MorseResult,
+    NormalSource, RejectReason, SaddleRole, Schedule, Sweep, Tracker, VertexType,
 };
 use necklace::pipeline::{critical_points, surface_morse_expected};
 use necklace::shapes::{Shape, ShapeKind};
@@ -675,4 +675,94 @@ fn a_varying_torus_completion_is_cut_across_its_thinnest_part_by_its_upper_link_
     let cycle = r.completions[1];
     assert_eq!(cycle.normal_from, NormalSource::Cycle);
     assert!(angle_deg(cycle.normal, [0.0, 1.0, 0.0]) < 20.0, "{cycle:?}");
+}
+
+/// The fewest tet edges from `from` to `to` through vertices above `v` in the sweep's
+/// order (outer-sphere vertices, and interior ones above `(f(v), v)`), by a plain
+/// breadth-first search over the tets' edges.
+fn fewest_edges_above(mesh: &TetMesh, f: &[f64], v: u32, from: u32, to: u32) -> Option<usize> {
+    let n = mesh.positions.len();
+    let mut neighbours = vec![Vec::new(); n];
+    for t in &mesh.tets {
+        for a in t {
+            for b in t {
+                if a != b {
+                    neighbours[*a as usize].push(*b);
+                }
+            }
+        }
+    }
+    let above = |u: u32| match mesh.kinds[u as usize] {
+        VertexKind::Outer => true,
+        VertexKind::Surface => false,
+        VertexKind::Interior => (f[u as usize], u) > (f[v as usize], v),
+    };
+    let mut hops = vec![usize::MAX; n];
+    hops[from as usize] = 0;
+    let mut queue = std::collections::VecDeque::from([from]);
+    while let Some(u) = queue.pop_front() {
+        if u == to {
+            return Some(hops[u as usize]);
+        }
+        for &w in &neighbours[u as usize] {
+            if w != v && above(w) && hops[w as usize] == usize::MAX {
+                hops[w as usize] = hops[u as usize] + 1;
+                queue.push_back(w);
+            }
+        }
+    }
+    None
+}
+
+#[test]
+fn the_cycle_a_closer_closes_is_a_shortest_closed_path_above_it() {
+    let surface = Shape::new(ShapeKind::Pretzel)
+        .with("g", 3.0)
+        .unwrap()
+        .with("res", 30.0)
+        .unwrap()
+        .mesh()
+        .unwrap();
+    for side in [Side::Inside, Side::Outside] {
+        let mesh = volume_mesh(&surface, side, &VolumeOptions::default())
+            .unwrap()
+            .mesh;
+        // A generic linear field: its sweep closes one essential cycle per handle.
+        let f: Vec<f64> = mesh
+            .positions
+            .iter()
+            .map(|p| p[0] + 0.37 * p[1] + 0.11 * p[2])
+            .collect();
+        let sweep = Sweep::new(&mesh);
+        let roles = sweep.roles(&f, &classify(&mesh, &f).unwrap(), &f);
+        assert_eq!(roles.closers.len(), 3, "{side:?}");
+        let mut search = CycleSearch::default();
+        for closer in &roles.closers {
+            let v = closer.vertex;
+            let path = sweep
+                .cycle_through(*closer, &f, usize::MAX, &mut search)
+                .unwrap();
+            // v, then one upper neighbour … the other, each step a tet edge, every vertex
+            // but v above it, none twice.
+            assert_eq!(path[0], v);
+            assert_eq!([path[path.len() - 1], path[1]], closer.through);
+            let adjacent =
+                |a: u32, b: u32| mesh.tets.iter().any(|t| t.contains(&a) && t.contains(&b));
+            for k in 0..path.len() {
+                assert!(
+                    adjacent(path[k], path[(k + 1) % path.len()]),
+                    "{side:?} {k}"
+                );
+            }
+            let mut seen = path.clone();
+            seen.sort_unstable();
+            seen.dedup();
+            assert_eq!(seen.len(), path.len());
+            let [from, to] = closer.through;
+            let fewest = fewest_edges_above(&mesh, &f, v, from, to).unwrap();
+            assert_eq!(path.len() - 2, fewest, "{side:?}");
+            // Within a limit below the vertices a search must visit, none is found.
+            assert_eq!(sweep.cycle_through(*closer, &f, 2, &mut search), None);
+        }
+    }
 }
