@@ -119,8 +119,8 @@ pub struct Sweep {
 
 /// Scratch space of [`Sweep::cycle_through`]: which side reached each vertex and from
 /// where, reset after each search along the vertices it touched (one allocation per
-/// thread, not one per search: on meshes of millions of vertices, clearing a whole
-/// array per search cost more than many searches).
+/// parallel task, not one per search: on meshes of millions of vertices, clearing a
+/// whole array per search cost more than the searches; `docs/decisions.md`, Morse).
 #[derive(Debug, Clone, Default)]
 pub struct CycleSearch {
     mark: Vec<u8>,
@@ -177,8 +177,7 @@ impl Sweep {
     /// Breadth first from both ends at once, a whole layer at a time from the side whose
     /// layer is smaller, neighbours in index order: the same path on every run. Two balls
     /// of half the cycle's length hold about a quarter of the vertices of one ball of the
-    /// whole length (on tm_cycloidal's outside, one-sided searches visited 124 k vertices
-    /// each on average). The first edge found between the two sides closes a shortest
+    /// whole length (figures in `docs/decisions.md`, Morse). The first edge found between the two sides closes a shortest
     /// path: a vertex one side reached has every neighbour reached by the time that side
     /// expands it, so the first edge between the sides is found from the newest layer of
     /// one side to the newest of the other.

@@ -599,16 +599,13 @@ fn stuff_lattice(
     );
     lap(3);
     if stuffed.tets.len() > options.max_tets() {
-        let mut failed = over_budget(
+        return Err(over_budget(
             stuffed.tets.len() as f64,
             Vec::new(),
+            expected_fit_level(&tree.truncations, stuffed.tets.len(), options),
             options,
             grid.finest_cell(&tree.octree),
-        );
-        if let Failed::OverBudget { expected_fit, .. } = &mut failed {
-            *expected_fit = expected_fit_level(&tree.truncations, stuffed.tets.len(), options);
-        }
-        return Err(failed);
+        ));
     }
     Ok(Lattice {
         grid,
@@ -793,13 +790,14 @@ impl Failed {
 fn over_budget(
     estimate: f64,
     truncations: Vec<Truncation>,
+    expected_fit: Option<f64>,
     options: &StuffingOptions,
     finest: f64,
 ) -> Failed {
     Failed::OverBudget {
         estimate,
         truncations,
-        expected_fit: None,
+        expected_fit,
         error: Error::new(
             ErrorKind::OverBudget,
             format!(
@@ -979,7 +977,13 @@ fn build_octree(
     let (Some(octree), None) = (octree, count.too_big) else {
         let finest = count.truncations.last().map_or(h, |t| t.size);
         let estimate = 0.5 * TETS_PER_LEAF * count.too_big.unwrap_or(0) as f64;
-        return Err(over_budget(estimate, count.truncations, options, finest));
+        return Err(over_budget(
+            estimate,
+            count.truncations,
+            None,
+            options,
+            finest,
+        ));
     };
     let leaves = octree.leaves();
     // Leaves inside give all their tets, leaves the boundary may cross about half.
@@ -1005,6 +1009,7 @@ fn build_octree(
         return Err(over_budget(
             estimated_tets as f64,
             scaled_to(&count.truncations, estimated_tets as f64),
+            None,
             options,
             finest,
         ));
