@@ -276,7 +276,8 @@ pub enum Command {
     /// Generate an analytic test shape with known necks and write it as a mesh.
     Shape {
         /// One of `necklace shape --list` (sphere, ellipsoid, capsule, limb, torus,
-        /// varying-torus, dumbbell, chain, satellites, eight, pretzel, buckyball).
+        /// varying-torus, dumbbell, chain, satellites, eight, pretzel, buckyball,
+        /// bent-ring, rings, torus-knot).
         #[arg(required_unless_present = "list")]
         name: Option<String>,
         /// A shape parameter, `name=value` (repeatable); `--list` shows them.

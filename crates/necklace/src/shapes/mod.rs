@@ -61,6 +61,9 @@ pub enum ShapeKind {
     /// A body ball carrying small rings half buried in it, like a mug's handles: genus
     /// `count`, each ring one handle and one tunnel.
     Rings,
+    /// A tube round a (p, q) torus knot (a trefoil by default): genus 1; its tunnel loop
+    /// runs once along the tube and bounds no disk outside.
+    TorusKnot,
 }
 
 /// A named numeric parameter of a shape, with its default and allowed range.
@@ -255,6 +258,26 @@ const BENT_RING: &[ParamSpec] = &[
     ),
     whole("res", 72.0, 4.0, 1000.0, RES_DOC),
 ];
+const TORUS_KNOT: &[ParamSpec] = &[
+    real("R", 1.0, 1e-6, 1e6, "radius of the torus the knot winds on"),
+    real(
+        "a",
+        0.5,
+        1e-6,
+        1e6,
+        "radius of the knot's swing round that torus (< R)",
+    ),
+    real("r", 0.14, 1e-6, 1e6, "tube radius"),
+    whole("p", 2.0, 2.0, 20.0, "turns round the torus's axis"),
+    whole(
+        "q",
+        3.0,
+        2.0,
+        20.0,
+        "turns round the torus's core (coprime to p)",
+    ),
+    whole("res", 64.0, 4.0, 1000.0, RES_DOC),
+];
 const RINGS: &[ParamSpec] = &[
     whole(
         "count",
@@ -377,7 +400,7 @@ const PRETZEL: &[ParamSpec] = &[
 
 impl ShapeKind {
     /// Every shape, in documentation order.
-    pub const ALL: [ShapeKind; 14] = [
+    pub const ALL: [ShapeKind; 15] = [
         ShapeKind::Sphere,
         ShapeKind::Ellipsoid,
         ShapeKind::Capsule,
@@ -392,6 +415,7 @@ impl ShapeKind {
         ShapeKind::Buckyball,
         ShapeKind::BentRing,
         ShapeKind::Rings,
+        ShapeKind::TorusKnot,
     ];
 
     /// The name used on the command line.
@@ -411,6 +435,7 @@ impl ShapeKind {
             ShapeKind::Buckyball => "buckyball",
             ShapeKind::BentRing => "bent-ring",
             ShapeKind::Rings => "rings",
+            ShapeKind::TorusKnot => "torus-knot",
         }
     }
 
@@ -445,6 +470,7 @@ impl ShapeKind {
             ShapeKind::Buckyball => BUCKYBALL,
             ShapeKind::BentRing => BENT_RING,
             ShapeKind::Rings => RINGS,
+            ShapeKind::TorusKnot => TORUS_KNOT,
         }
     }
 
@@ -505,6 +531,12 @@ impl ShapeKind {
                 "tube of radius r around the curve (R cos t, R sin t, bend cos 2t); genus 1; one \
                  handle (a meridian, length 2πr) and one tunnel around the hole, which no plane \
                  through the hole's centre cuts as a closed curve once |bend| > r"
+            }
+            ShapeKind::TorusKnot => {
+                "tube of radius r around the (p, q) torus knot ((R + a cos qt) cos pt, (R + a cos \
+                 qt) sin pt, a sin qt); genus 1; one handle (a meridian, length 2πr) and one \
+                 tunnel, which runs once along the tube and bounds no disk outside (a Seifert \
+                 longitude: it links the core an even number of times, 0 over the integers)"
             }
         }
     }
@@ -683,6 +715,17 @@ impl Shape {
                     0.5 * p("edge")
                 ))
             }
+            ShapeKind::TorusKnot if gcd(p("p") as u64, p("q") as u64) != 1 => fail(format!(
+                "torus-knot: p = {} and q = {} must be coprime (else the curve closes early)",
+                p("p"),
+                p("q")
+            )),
+            ShapeKind::TorusKnot if !(p("a") < p("R") && 2.0 * p("r") < p("a")) => fail(format!(
+                "torus-knot: need 2 r = {} < a = {} < R = {}",
+                2.0 * p("r"),
+                p("a"),
+                p("R")
+            )),
             ShapeKind::BentRing if p("r") >= 0.5 * p("R") => fail(format!(
                 "bent-ring: the tube radius r = {} must be below R / 2 = {}",
                 p("r"),
@@ -723,6 +766,14 @@ impl Shape {
         }
     }
 
+    /// The torus knot's core curve at parameter `t` (period 2π).
+    pub fn knot_core(&self, t: f64) -> [f64; 3] {
+        let (big_r, a) = (self.param("R"), self.param("a"));
+        let (p, q) = (self.param("p"), self.param("q"));
+        let rho = big_r + a * (q * t).cos();
+        [rho * (p * t).cos(), rho * (p * t).sin(), a * (q * t).sin()]
+    }
+
     /// Genus of the surface.
     pub fn genus(&self) -> usize {
         match self.kind {
@@ -734,7 +785,10 @@ impl Shape {
             | ShapeKind::Chain
             | ShapeKind::Satellites => 0,
             ShapeKind::Buckyball => 31,
-            ShapeKind::Torus | ShapeKind::VaryingTorus | ShapeKind::BentRing => 1,
+            ShapeKind::Torus
+            | ShapeKind::VaryingTorus
+            | ShapeKind::BentRing
+            | ShapeKind::TorusKnot => 1,
             ShapeKind::Rings => self.param("count") as usize,
             ShapeKind::Eight => 2,
             ShapeKind::Pretzel => self.param("g") as usize,
@@ -927,6 +981,9 @@ impl Shape {
                 }
                 d
             }
+            ShapeKind::TorusKnot => {
+                sdf::distance_to_closed_curve(p, |t| self.knot_core(t)) - self.param("r")
+            }
             ShapeKind::BentRing => {
                 let (big_r, bend) = (self.param("R"), self.param("bend"));
                 let core = |t: f64| [big_r * t.cos(), big_r * t.sin(), bend * (2.0 * t).cos()];
@@ -999,6 +1056,10 @@ impl Shape {
             ShapeKind::BentRing => {
                 let (big_r, r) = (self.param("R"), self.param("r"));
                 [big_r + r, big_r + r, self.param("bend").abs() + r]
+            }
+            ShapeKind::TorusKnot => {
+                let (big_r, a, r) = (self.param("R"), self.param("a"), self.param("r"));
+                [big_r + a + r, big_r + a + r, a + r]
             }
             ShapeKind::Rings => [self.param("body") + self.param("ring") + self.param("wire"); 3],
             ShapeKind::Dumbbell | ShapeKind::Chain => {
@@ -1104,6 +1165,19 @@ impl Shape {
                 }
                 necks
             }
+            ShapeKind::TorusKnot => vec![
+                handle(
+                    Some(2.0 * PI * self.param("r")),
+                    None,
+                    "a meridian circle of the uniform tube: position degenerate",
+                ),
+                tunnel(
+                    None,
+                    None,
+                    "runs once along the tube and bounds no disk outside (the linked search); \
+                     no closed form",
+                ),
+            ],
             ShapeKind::BentRing => vec![
                 handle(
                     Some(2.0 * PI * self.param("r")),
@@ -1244,6 +1318,15 @@ fn truncated_icosahedron(edge: f64) -> Skeleton {
         }
     }
     (vertices, edges)
+}
+
+/// Greatest common divisor.
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
 }
 
 #[cfg(test)]
