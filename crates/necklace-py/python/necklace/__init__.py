@@ -95,7 +95,7 @@ class Loop:
             largest scale).
         homology: its Z2 homology class, one ``"0"``/``"1"`` per basis cycle.
         separating: whether it cuts the surface in two (class 0).
-        initial: how the initial loop was built (``"plane"``, ``"membrane"`` or ``"turned_plane"``).
+        initial: how the initial loop was built (``"plane"``, ``"membrane"``, ``"turned_plane"`` or ``"linked"``: no saddle, a class that bounds no disk on its side).
         lasso: its best-fit circle (:class:`Lasso`).
         data: every field of the loop as ``loops.json`` has it (``bulge``,
             ``areas``, ``opening``, ``flatness``, ``reason``, ``tightening``, ...).

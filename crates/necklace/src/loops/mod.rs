@@ -59,6 +59,7 @@
 pub mod classes;
 pub mod cut;
 pub mod lasso;
+pub mod linked;
 pub mod membrane;
 pub mod opening;
 mod report;
@@ -234,6 +235,9 @@ pub enum Initial {
     /// over [`LoopOptions::turned_planes`] directions, where the saddle's own plane cut
     /// a separating one.
     TurnedPlane,
+    /// No saddle: the shortest closed path of edges in a class that bounds on the side
+    /// but no disk there (module [`linked`]).
+    Linked,
 }
 
 impl Default for LoopOptions {
@@ -779,7 +783,7 @@ fn narrowest(
 ) -> Candidate {
     let surface = cutter.mesh;
     let (n, normals) = match c.initial {
-        Initial::TurnedPlane => (c.normal, vec![c.normal]),
+        Initial::TurnedPlane | Initial::Linked => (c.normal, vec![c.normal]),
         Initial::Plane | Initial::Membrane => cutting_normals(seed, options),
     };
     let step = options.slide_step * surface.bbox_diagonal();

@@ -31,7 +31,8 @@ pub struct NeckLoop {
     pub initial: Initial,
     /// A disk the loop bounds (not in the JSON; written as `membranes.ply`): for a
     /// membrane-built loop, the fan from the saddle to the membrane's sources and the
-    /// strip from them to the loop; for a plane-built one, the cone from the saddle.
+    /// strip from them to the loop; for a plane-built one, the cone from the saddle;
+    /// empty for a linked one (it bounds no disk on its side).
     #[serde(skip)]
     pub membrane: SurfaceMesh,
     /// Signed distance along the cutting normal from the saddle to the plane that gave
@@ -50,9 +51,9 @@ pub struct NeckLoop {
     /// this version writes; absent only in a `loops.json` written before it existed.
     #[serde(default)]
     pub lasso: Option<Lasso>,
-    /// The saddle it came from.
+    /// The saddle it came from (a linked loop, [`Initial::Linked`]: its centroid).
     pub saddle: [f64; 3],
-    /// Index of that saddle among the seeds.
+    /// Index of that saddle among the seeds (a linked loop has none: one past them).
     pub seed: usize,
     /// The saddle's persistence.
     pub persistence: usize,

@@ -147,7 +147,8 @@ pub fn transfer_loops(
                     .map(|m| (m.crossings, m.faces, m.sources)),
                     // The turned plane's direction was the simplified surface's choice:
                     // the faces under the loop and its best-fit plane carry it over.
-                    (Way::Same, Initial::TurnedPlane) => None,
+                    // A linked loop is made on the input, never carried.
+                    (Way::Same, Initial::TurnedPlane | Initial::Linked) => None,
                     (Way::Traced, _) => traced(surface, &to.topology, distance, &l.points, options)
                         .map(|(crossings, faces)| (crossings, faces, Vec::new())),
                     (Way::LoopPlane, _) => {
@@ -181,6 +182,7 @@ pub fn transfer_loops(
                         (Way::Same, Initial::Plane) => "the same plane",
                         (Way::Same, Initial::Membrane) => "the saddle's membrane",
                         (Way::Same, Initial::TurnedPlane) => "a turned plane",
+                        (Way::Same, Initial::Linked) => "the linked search",
                         (Way::Traced, _) => "the faces under that loop",
                         (Way::LoopPlane, _) => "the best-fit plane of that loop",
                     }

@@ -407,6 +407,7 @@ pub fn analyze_with_progress(
     let mut tracker = Tracker::new();
     let mut observed = Observed::default();
     let mut followed: Vec<Followed> = Vec::new();
+    let mut cycles: Vec<Vec<[f64; 3]>> = Vec::new();
     progress.start("smoothing and critical points", plan.len() as u64);
     let mut solved = plan.first().map(|p| solve(&mut solver, p.tau, &f));
     for (k, planned) in plan.iter().enumerate() {
@@ -438,14 +439,22 @@ pub fn analyze_with_progress(
                 &tracker,
                 &mut observed,
             );
-            record_closings(
+            let closed = record_closings(
                 (mesh, &links, &sweep),
                 &level,
                 step,
                 &roles.closers,
                 options.track_radius,
                 &mut followed,
+                steps.is_empty(),
             );
+            if steps.is_empty() {
+                cycles = closed
+                    .into_iter()
+                    .flatten()
+                    .map(|path| path.iter().map(|&u| mesh.positions[u as usize]).collect())
+                    .collect();
+            }
             steps.push(summarize(
                 step,
                 planned.scale,
@@ -517,6 +526,7 @@ pub fn analyze_with_progress(
         field: f,
         morse_expected,
         cycle_rank: sweep.cycle_rank(),
+        cycles,
         timings,
     })
 }
@@ -572,6 +582,8 @@ fn plan_steps(mesh: &TetMesh, options: &MorseOptions) -> Vec<PlannedStep> {
 /// it, like a track (by vertex index, the first such completion); the others start
 /// completions, measured here (axis, Hessian, cycle: only for these, not for every
 /// closing at every level), where their upper link gives an axis and a quadratic fits.
+/// With `keep_cycles` (the first level), returns every closer's cycle as a vertex path
+/// (`None` where the search gave up), in vertex order; else nothing.
 fn record_closings(
     (mesh, links, sweep): (&TetMesh, &Links, &Sweep),
     f: &[f64],
@@ -579,7 +591,8 @@ fn record_closings(
     closers: &[Closer],
     track_radius: f64,
     followed: &mut Vec<Followed>,
-) {
+    keep_cycles: bool,
+) -> Vec<Option<Vec<u32>>> {
     let mut closers = closers.to_vec();
     closers.sort_by_key(|c| c.vertex);
     let mut fresh = Vec::new();
@@ -597,32 +610,48 @@ fn record_closings(
             None => fresh.push((c, radius)),
         }
     }
-    let fresh: Vec<Followed> = fresh
+    let measured: Vec<(Option<Followed>, Option<Vec<u32>>)> = fresh
         .into_par_iter()
         .map_init(CycleSearch::default, |search, (c, radius)| {
             let v = c.vertex as usize;
-            let first = Closing {
-                step,
-                vertex: c.vertex,
-                position: mesh.positions[v],
-                value: f[v],
-                axis: links.upper_axis(v, f, &mesh.positions, c.through)?,
-                hessian: hessian_at(mesh, f, c.vertex)?,
-                cycle_normal: sweep
-                    .cycle_through(c, f, CYCLE_SEARCH_LIMIT, search)
-                    .and_then(|path| cycle_normal(&mesh.positions, &path)),
-            };
-            Some(Followed {
-                first,
-                last_step: step,
-                last_position: first.position,
-                last_radius: radius,
-                seen: 1,
-            })
+            let fit = links
+                .upper_axis(v, f, &mesh.positions, c.through)
+                .and_then(|axis| Some((axis, hessian_at(mesh, f, c.vertex)?)));
+            // The cycle only where it is used: a completion's plane, or kept.
+            let cycle = (keep_cycles || fit.is_some())
+                .then(|| sweep.cycle_through(c, f, CYCLE_SEARCH_LIMIT, search))
+                .flatten();
+            let followed = fit.map(|(axis, hessian)| {
+                let first = Closing {
+                    step,
+                    vertex: c.vertex,
+                    position: mesh.positions[v],
+                    value: f[v],
+                    axis,
+                    hessian,
+                    cycle_normal: cycle
+                        .as_deref()
+                        .and_then(|path| cycle_normal(&mesh.positions, path)),
+                };
+                Followed {
+                    first,
+                    last_step: step,
+                    last_position: first.position,
+                    last_radius: radius,
+                    seen: 1,
+                }
+            });
+            (followed, cycle.filter(|_| keep_cycles))
         })
-        .flatten()
         .collect();
-    followed.extend(fresh);
+    let mut cycles = Vec::new();
+    for (f, cycle) in measured {
+        followed.extend(f);
+        if keep_cycles {
+            cycles.push(cycle);
+        }
+    }
+    cycles
 }
 
 /// The normal of the plane through a cycle's first vertex that holds the cycle's

@@ -284,6 +284,14 @@ pub struct MorseResult {
     /// vertices, outer sphere coned off): the surface's genus when the volume mesh kept
     /// its topology ([`cycles`](super::cycles)).
     pub cycle_rank: usize,
+    /// The cycles closed at the first classified level, one per vertex that closes an
+    /// essential cycle there (in vertex order), each a closed polyline through the
+    /// volume mesh's vertices that stays in the side (the closer, then the fewest edges
+    /// round through vertices above it): a basis of H₁ of the side (Z2) when there are
+    /// `cycle_rank` of them. A cycle whose search gave up is left out. What the other
+    /// side's loops are linked against ([`loops::linked`](crate::loops::linked)).
+    #[serde(skip)]
+    pub cycles: Vec<Vec<[f64; 3]>>,
     /// Seconds per part.
     pub timings: MorseTimings,
 }

@@ -315,11 +315,21 @@ pub fn find_necks_with_progress(
         (true, false) => vec![run(Side::Inside, 0)],
         _ => vec![run(Side::Outside, 0)],
     };
+    let mut sides = Vec::new();
     for found in runs {
         // `None`: stopped because the other side failed; its error comes in turn.
         if let Some(found) = found? {
-            report.add_side(found);
+            sides.push(found);
         }
+    }
+    // 6b. Classes that bound on a side but no disk there (a knotted part): from the
+    //     other side's loops and cycles.
+    if options.loops.homology_selection && options.morse.schedule == Schedule::ScaleSpace {
+        link_sides(&prepared, carry.as_ref(), &mut sides);
+    }
+    for mut found in sides {
+        rank_warning(&prepared, &mut found);
+        report.add_side(found);
     }
     clock.lap();
     report.timings.seconds = clock.total();
@@ -609,20 +619,9 @@ fn analyse_side(
         cycle_rank: result.cycle_rank,
         steps: result.steps.clone(),
     };
+    // The rank's warning is given once the other side's linked search has run
+    // ([`link_sides`]).
     let rank = loop_rank(&found.loops);
-    if let Some(g) = genus.filter(|&g| g != rank as i64) {
-        warnings.push(if crossing > 0 {
-            format!(
-                "{name}: the {} loops have Z2 rank {rank}; the surface's components have genus {g}, but it crosses itself ({crossing} pairs of triangles), so the solid it bounds may have another",
-                side.neck_name()
-            )
-        } else {
-            format!(
-                "{name}: the {} loops have Z2 rank {rank}, the surface has genus {g}",
-                side.neck_name()
-            )
-        });
-    }
     let homology = HomologyCheck {
         genus,
         rank,
@@ -663,6 +662,7 @@ fn analyse_side(
         dropped: found.dropped,
         warnings,
         notes: Vec::new(),
+        cycles: result.cycles,
     }))
 }
 
@@ -750,6 +750,87 @@ fn loops_to_genus(
         cutter.side.name()
     ));
     Ok(again)
+}
+
+/// Where a side's loops span fewer classes than the genus and the other side's span it
+/// all, the loops of the missing classes that bound no disk on the side, from the other
+/// side's loops and cycles ([`loops::linked`]), on the input (where the loops are). Not
+/// for a surface that crosses itself, whose genus is not the solid's.
+fn link_sides(prepared: &PreparedSurface, carry: Option<&Carry>, sides: &mut [SideRun]) {
+    let [a, b] = sides else { return };
+    let crosses = prepared.distance.crossings().is_some_and(|c| !c.is_empty());
+    for first in [true, false] {
+        let (this, other) = if first {
+            (&mut *a, &*b)
+        } else {
+            (&mut *b, &*a)
+        };
+        let (homology, side) = (this.report.homology, this.report.side);
+        let Some(genus) = homology.genus.filter(|&g| g > homology.rank as i64) else {
+            continue;
+        };
+        if crosses {
+            continue;
+        }
+        let start = Instant::now();
+        let built;
+        let surface = match carry {
+            Some(c) => c.surface.get_or_init(|| LoopSurface::new(&prepared.mesh)),
+            None => {
+                built = LoopSurface::new(&prepared.mesh);
+                &built
+            }
+        };
+        let first_seed = this.report.saddles.len();
+        let linked = loops::linked::linked_loops(
+            &prepared.mesh,
+            surface,
+            side,
+            &this.loops,
+            &other.loops,
+            &other.cycles,
+            genus as usize,
+            first_seed,
+            &LoopOptions::default(),
+        );
+        if !linked.loops.is_empty() {
+            this.notes.push(format!(
+                "{}: {} {} loops of classes that bound no disk on this side (a knotted part), from the {} side's loops and cycles",
+                side.name(),
+                linked.loops.len(),
+                side.neck_name(),
+                other.report.side.name()
+            ));
+        }
+        this.loops.extend(linked.loops);
+        this.warnings.extend(linked.shortfalls);
+        let rank = loop_rank(&this.loops);
+        this.report.homology = HomologyCheck {
+            rank,
+            ok: rank as i64 == genus,
+            ..homology
+        };
+        let seconds = start.elapsed().as_secs_f64();
+        this.report.timings.loops += seconds;
+        this.report.timings.total += seconds;
+    }
+}
+
+/// The warning of a side whose loops' Z2 rank is not the surface's genus.
+fn rank_warning(prepared: &PreparedSurface, run: &mut SideRun) {
+    let HomologyCheck { genus, rank, .. } = run.report.homology;
+    let Some(g) = genus.filter(|&g| g != rank as i64) else {
+        return;
+    };
+    let (name, neck) = (run.report.side.name(), run.report.side.neck_name());
+    let crossing = prepared.distance.crossings().map_or(0, <[_]>::len);
+    run.warnings.push(if crossing > 0 {
+        format!(
+            "{name}: the {neck} loops have Z2 rank {rank}; the surface's components have genus {g}, but it crosses itself ({crossing} pairs of triangles), so the solid it bounds may have another"
+        )
+    } else {
+        format!("{name}: the {neck} loops have Z2 rank {rank}, the surface has genus {g}")
+    });
 }
 
 /// The Z2 rank of the loops' homology classes.

@@ -227,6 +227,9 @@ pub(super) struct SideRun {
     pub dropped: Vec<DroppedLoop>,
     pub warnings: Vec<String>,
     pub notes: Vec<String>,
+    /// The Morse stage's cycles of this side ([`crate::morse::MorseResult::cycles`]):
+    /// what the other side's linked search needs.
+    pub cycles: Vec<Vec<[f64; 3]>>,
 }
 
 impl NeckReport {

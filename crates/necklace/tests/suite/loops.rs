@@ -560,6 +560,106 @@ fn bent_ring_tunnel(bend: f64) {
     check_membranes(&shape.mesh().unwrap(), &r, &format!("bent-{bend}"));
 }
 
+/// Gauss's linking number of two closed polylines, by the midpoint rule over each pair
+/// of segments (each polyline's segments split in `split`): accurate to a few
+/// hundredths when the segments are short against the curves' distance.
+fn linking_number(a: &[[f64; 3]], b: &[[f64; 3]], split: usize) -> f64 {
+    let pieces = |p: &[[f64; 3]]| -> Vec<([f64; 3], [f64; 3])> {
+        let n = p.len();
+        (0..n)
+            .flat_map(|i| {
+                let (u, v) = (p[i], p[(i + 1) % n]);
+                (0..split).map(move |k| {
+                    let t = (k as f64 + 0.5) / split as f64;
+                    let at = [0, 1, 2].map(|c| u[c] + t * (v[c] - u[c]));
+                    let d = [0, 1, 2].map(|c| (v[c] - u[c]) / split as f64);
+                    (at, d)
+                })
+            })
+            .collect()
+    };
+    let (pa, pb) = (pieces(a), pieces(b));
+    let mut total = 0.0;
+    for (x, dx) in &pa {
+        for (y, dy) in &pb {
+            let r = [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+            let c = [
+                dx[1] * dy[2] - dx[2] * dy[1],
+                dx[2] * dy[0] - dx[0] * dy[2],
+                dx[0] * dy[1] - dx[1] * dy[0],
+            ];
+            let d = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+            total += (r[0] * c[0] + r[1] * c[1] + r[2] * c[2]) / (d * d * d);
+        }
+    }
+    total / (4.0 * PI)
+}
+
+#[test]
+fn a_knotted_tube_has_a_tunnel_loop_along_it_that_links_its_core_zero_times() {
+    // A trefoil tube: no plane through an outside saddle cuts its tunnel loop, which runs
+    // once along the tube and bounds a Seifert surface outside, not a disk. The linked
+    // search finds it from the handle loop and the inside's cycle; the answer is checked
+    // against the analytic core curve by Gauss's integral, independent of the code.
+    let shape = Shape::new(ShapeKind::TorusKnot).with("res", 48.0).unwrap();
+    let mesh = shape.mesh().unwrap();
+    let r = find_necks(&mesh, &NeckOptions::default()).unwrap();
+    let topology = Topology::new(&mesh);
+    for l in &r.loops {
+        check_loop(&mesh, &topology, l);
+    }
+    assert!(r.morse.iter().all(|m| m.ok));
+    let (handles, tunnels) = (of_kind(&r, Side::Inside), of_kind(&r, Side::Outside));
+    assert_eq!((handles.len(), tunnels.len()), (1, 1), "{:?}", r.dropped);
+    for s in &r.sides {
+        assert!(s.homology.ok, "{:?}", s.homology);
+    }
+    let core: Vec<[f64; 3]> = (0..2400)
+        .map(|i| shape.knot_core(2.0 * PI * i as f64 / 2400.0))
+        .collect();
+    // The handle loop is a meridian: length 2πr, linking the core once.
+    let h = handles[0];
+    let expected = 2.0 * PI * shape.param("r");
+    assert!(
+        (h.length - expected).abs() < 0.02 * expected,
+        "{}",
+        h.length
+    );
+    let lk = linking_number(&h.points, &core, 4);
+    assert!(
+        (lk.abs() - 1.0).abs() < 0.05,
+        "handle links the core {lk} times"
+    );
+    // The tunnel loop: a non-separating geodesic of linking number 0 with the core (so
+    // it bounds outside) that runs once along the tube: between half the core's length
+    // and a fifth more than it.
+    let t = tunnels[0];
+    assert_eq!(t.initial, Initial::Linked);
+    assert!(!t.separating);
+    let lk = linking_number(&t.points, &core, 4);
+    assert!(lk.abs() < 0.05, "tunnel links the core {lk} times");
+    let core_length = closed_length(&core);
+    assert!(
+        t.length < 1.2 * core_length,
+        "{} against {core_length}",
+        t.length
+    );
+    assert!(
+        t.length > 0.5 * core_length,
+        "{} against {core_length}",
+        t.length
+    );
+    assert!(t.reason.contains("no disk"), "{}", t.reason);
+    // The same loops on one thread.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| find_necks(&mesh, &NeckOptions::default()).unwrap());
+    let lengths = |r: &NeckReport| r.loops.iter().map(|l| l.length).collect::<Vec<_>>();
+    assert_eq!(lengths(&one), lengths(&r));
+}
+
 /// `membranes.ply` of a run reads back as one disk per loop (χ = 1, oriented) whose
 /// boundary lies on the surface.
 fn check_membranes(surface: &SurfaceMesh, report: &NeckReport, name: &str) {
