@@ -325,7 +325,7 @@ pub fn find_necks_with_progress(
     // 6b. Classes that bound on a side but no disk there (a knotted part): from the
     //     other side's loops and cycles.
     if options.loops.homology_selection && options.morse.schedule == Schedule::ScaleSpace {
-        link_sides(&prepared, carry.as_ref(), &mut sides);
+        link_sides(&prepared, carry.as_ref(), &options.loops, &mut sides);
     }
     for mut found in sides {
         rank_warning(&prepared, &mut found);
@@ -756,7 +756,12 @@ fn loops_to_genus(
 /// all, the loops of the missing classes that bound no disk on the side, from the other
 /// side's loops and cycles ([`loops::linked`]), on the input (where the loops are). Not
 /// for a surface that crosses itself, whose genus is not the solid's.
-fn link_sides(prepared: &PreparedSurface, carry: Option<&Carry>, sides: &mut [SideRun]) {
+fn link_sides(
+    prepared: &PreparedSurface,
+    carry: Option<&Carry>,
+    options: &LoopOptions,
+    sides: &mut [SideRun],
+) {
     let [a, b] = sides else { return };
     let crosses = prepared.distance.crossings().is_some_and(|c| !c.is_empty());
     for first in [true, false] {
@@ -791,14 +796,15 @@ fn link_sides(prepared: &PreparedSurface, carry: Option<&Carry>, sides: &mut [Si
             &other.cycles,
             genus as usize,
             first_seed,
-            &LoopOptions::default(),
+            options,
         );
         if !linked.loops.is_empty() {
+            let n = linked.loops.len();
             this.notes.push(format!(
-                "{}: {} {} loops of classes that bound no disk on this side (a knotted part), from the {} side's loops and cycles",
+                "{}: {n} {} loop{} of classes that bound no disk on this side (a knotted part), from the {} side's loops and cycles",
                 side.name(),
-                linked.loops.len(),
                 side.neck_name(),
+                if n == 1 { "" } else { "s" },
                 other.report.side.name()
             ));
         }
