@@ -246,9 +246,9 @@ pub fn linked_loops(
 
 /// Per edge of `topology` and cycle `i` (`g` numbers per edge, edge-major): the signed
 /// number of times the edge, from its first stored vertex to its second, crosses the fan
-/// of triangles from `cycles[i]`'s centroid (+1 along the fan's normal). Summed round a
-/// closed path of edges, each with the sign of the way it is walked, that is the path's
-/// linking number with the cycle.
+/// of triangles from `cycles[i]`'s centroid (+1 along the fan's normal; any apex spans
+/// the cycle). Summed round a closed path of edges, each with the sign of the way it is
+/// walked, that is the path's linking number with the cycle.
 fn link_counts(surface: &SurfaceMesh, topology: &Topology, cycles: &[Vec<[f64; 3]>]) -> Vec<i32> {
     let g = cycles.len();
     let mut counts = vec![0i32; topology.num_edges() * g];
@@ -257,7 +257,7 @@ fn link_counts(surface: &SurfaceMesh, topology: &Topology, cycles: &[Vec<[f64; 3
         if n < 2 {
             continue;
         }
-        let c = centroid_of(cycle);
+        let c = centroid(cycle);
         let fan: Vec<[[f64; 3]; 3]> = (0..n).map(|k| [c, cycle[k], cycle[(k + 1) % n]]).collect();
         let boxes: Vec<([f64; 3], [f64; 3])> = fan.iter().map(|t| bounds(*t)).collect();
         let all = bounds(fan.iter().flatten().copied());
@@ -276,16 +276,6 @@ fn link_counts(surface: &SurfaceMesh, topology: &Topology, cycles: &[Vec<[f64; 3
         }
     }
     counts
-}
-
-fn centroid_of(points: &[[f64; 3]]) -> [f64; 3] {
-    let mut c = [0.0; 3];
-    for p in points {
-        for k in 0..3 {
-            c[k] += p[k] / points.len() as f64;
-        }
-    }
-    c
 }
 
 fn overlap(a: ([f64; 3], [f64; 3]), b: ([f64; 3], [f64; 3])) -> bool {

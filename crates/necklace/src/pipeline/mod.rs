@@ -763,7 +763,9 @@ fn link_sides(
     sides: &mut [SideRun],
 ) {
     let [a, b] = sides else { return };
-    let crosses = prepared.distance.crossings().is_some_and(|c| !c.is_empty());
+    if prepared.distance.crossings().is_some_and(|c| !c.is_empty()) {
+        return;
+    }
     for first in [true, false] {
         let (this, other) = if first {
             (&mut *a, &*b)
@@ -774,9 +776,6 @@ fn link_sides(
         let Some(genus) = homology.genus.filter(|&g| g > homology.rank as i64) else {
             continue;
         };
-        if crosses {
-            continue;
-        }
         let start = Instant::now();
         let built;
         let surface = match carry {
