@@ -10,11 +10,11 @@
 //! by [`Topology`]; a vertex on the plane gives exactly `t = 0` or `t = 1`.
 //!
 //! Entry points: [`plane_cut`] (or [`Cutter::cut`] with the surface's [`EdgeTree`]),
-//! [`loop_around`], [`encloses_another`].
+//! [`loop_around`], [`encloses_another`], [`region_side`].
 
 pub use crate::geom::plane_basis;
 use crate::geom::{dot, lerp, norm, sub};
-use crate::mesh::{SurfaceMesh, Topology};
+use crate::mesh::{Side, SurfaceMesh, Topology};
 
 /// A plane through `origin` with unit `normal`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -401,6 +401,51 @@ pub fn encloses_another(
     })
 }
 
+/// The side of the surface that the region of the plane bounded by closed curve `curve`
+/// lies on next to the curve: inside the solid where the outward normals of the faces
+/// it crosses, projected into the plane, point out of the region on the whole (a
+/// cross-section of a part), outside where they point into it (a hole's). Each of the
+/// curve's segments counts by its length. With [`encloses_another`] false the whole
+/// region is on that side.
+pub fn region_side(
+    mesh: &SurfaceMesh,
+    topology: &Topology,
+    plane: &Plane,
+    curve: &CutCurve,
+) -> Side {
+    let (u, v) = plane_basis(plane.normal);
+    let project = |p: [f64; 3]| {
+        let d = sub(p, plane.origin);
+        [dot(d, u), dot(d, v)]
+    };
+    let poly: Vec<[f64; 2]> = curve
+        .points(mesh, topology)
+        .into_iter()
+        .map(project)
+        .collect();
+    let n = poly.len();
+    let (mut area, mut outward) = (0.0, 0.0);
+    for (k, &face) in curve.faces.iter().enumerate().take(n) {
+        let (a, b) = (poly[k], poly[(k + 1) % n]);
+        area += a[0] * b[1] - a[1] * b[0];
+        let normal = mesh.face_normal_scaled(face as usize);
+        let scale = norm(normal);
+        if scale.is_nan() || scale <= 0.0 {
+            continue;
+        }
+        let m = [dot(normal, u) / scale, dot(normal, v) / scale];
+        // The segment's right-hand normal, as long as the segment: out of the region
+        // for a counter-clockwise polygon.
+        let right = [b[1] - a[1], a[0] - b[0]];
+        outward += m[0] * right[0] + m[1] * right[1];
+    }
+    if outward * area > 0.0 {
+        Side::Inside
+    } else {
+        Side::Outside
+    }
+}
+
 /// Index of the closed curve around `point` (a point of the plane): among the closed
 /// curves whose in-plane polygon contains the point's projection, the one of smallest
 /// area. `None` when no closed curve contains it.
@@ -433,4 +478,65 @@ pub fn loop_around(
         }
     }
     best.map(|(i, _)| i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A torus round the z axis (radii 2 and 0.5), outward, `n × n` quads.
+    fn torus(n: usize) -> SurfaceMesh {
+        use std::f64::consts::TAU;
+        let mut positions = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let (u, v) = (TAU * i as f64 / n as f64, TAU * j as f64 / n as f64);
+                let rho = 2.0 + 0.5 * v.cos();
+                positions.push([rho * u.cos(), rho * u.sin(), 0.5 * v.sin()]);
+            }
+        }
+        let at = |i: usize, j: usize| ((i % n) * n + j % n) as u32;
+        let mut triangles = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                triangles.push([a, b, c]);
+                triangles.push([a, c, d]);
+            }
+        }
+        SurfaceMesh::new(positions, triangles).unwrap()
+    }
+
+    /// The side of the curve round `point` in the plane through it with `normal`.
+    fn side_around(mesh: &SurfaceMesh, point: [f64; 3], normal: [f64; 3]) -> Side {
+        let topology = Topology::new(mesh);
+        let plane = Plane {
+            origin: point,
+            normal,
+        };
+        let curves = plane_cut(mesh, &topology, &plane);
+        let i = loop_around(mesh, &topology, &plane, &curves, point).unwrap();
+        assert!(!encloses_another(mesh, &topology, &plane, &curves, i));
+        region_side(mesh, &topology, &plane, &curves[i])
+    }
+
+    #[test]
+    fn a_tube_section_is_inside_and_the_hole_outside_whatever_the_orientation() {
+        let mut mesh = torus(24);
+        assert!(mesh.signed_volume() > 0.0, "the fixture is outward");
+        // The tube's cross-section round its core, and the disk across the hole.
+        let tube = ([2.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        let hole = ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+        assert_eq!(side_around(&mesh, tube.0, tube.1), Side::Inside);
+        assert_eq!(side_around(&mesh, hole.0, hole.1), Side::Outside);
+        // The plane's normal turned round reverses the curve, not its side.
+        assert_eq!(side_around(&mesh, tube.0, [0.0, -1.0, 0.0]), Side::Inside);
+        assert_eq!(side_around(&mesh, hole.0, [0.0, 0.0, -1.0]), Side::Outside);
+        // Inward-facing triangles swap the sides.
+        for t in &mut mesh.triangles {
+            t.swap(1, 2);
+        }
+        assert_eq!(side_around(&mesh, tube.0, tube.1), Side::Outside);
+        assert_eq!(side_around(&mesh, hole.0, hole.1), Side::Inside);
+    }
 }

@@ -39,9 +39,10 @@
 //!
 //! A seed may need a disk ([`Seed::disk_only`]: the Morse stage's completions, saddles
 //! not selected as necks): its plane's curve around it is kept only where no other
-//! curve of the plane lies inside it ([`cut::encloses_another`]), so that the loop bounds
-//! a disk of the seed's side (a handle or tunnel loop whatever the saddle); only the
-//! plane through it is cut, no membrane, and its tightening may shrink it any amount.
+//! curve of the plane lies inside it ([`cut::encloses_another`]) and the region it
+//! bounds lies on the seed's side ([`cut::region_side`]), so that the loop bounds a disk
+//! of that side (a handle or tunnel loop whatever the saddle); planes are cut (through
+//! it, then parallel ones), no membrane, and its tightening may shrink it any amount.
 //! [`complete_classes`] adds such loops to a result where they add a class.
 //!
 //! Also here: [`classes`] (the edges a loop crosses, its Z2 class, the areas of its
@@ -132,9 +133,9 @@ pub struct Seed {
     /// lies inside it: the region of the plane it bounds is then a disk of the seed's
     /// side, so the loop bounds a disk there (a handle loop inside, a tunnel loop
     /// outside) whatever the saddle. For a saddle the Morse stage did not select as a
-    /// neck (`MorseResult::completions`). Only the plane through the saddle is cut: a
-    /// parallel plane's point may lie on the other side of the surface, and a membrane's
-    /// loop is not checked. Default false.
+    /// neck (`MorseResult::completions`). A curve whose region lies on the other side
+    /// (a parallel plane's point moved across the surface) is passed over too; no
+    /// membrane is tried, as a membrane's loop is not checked. Default false.
     #[serde(default)]
     pub disk_only: bool,
 }
@@ -318,7 +319,7 @@ pub fn find_loops_with_progress(
                     .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
                 c
             };
-            let outcome = loop_from_seed(&cutter, &geometry, &distance, seed, options)
+            let outcome = loop_from_seed(&cutter, &geometry, &distance, seed, kind, options)
                 .map(measured)
                 .map(|c| {
                     let separates = c.class.iter().all(|w| *w == 0);
@@ -359,7 +360,7 @@ pub fn find_loops_with_progress(
         .into_par_iter()
         .map(|(i, c)| {
             let c = if seeds[i].role == Some(Role::CycleClosing) {
-                narrowest(&cutter, &geometry, &measures, &seeds[i], c, options)
+                narrowest(&cutter, &geometry, &measures, &seeds[i], kind, c, options)
             } else {
                 c
             };
@@ -595,6 +596,7 @@ fn loop_from_seed(
     geometry: &SurfaceGeometry,
     distance: &LazyDistance<'_>,
     seed: &Seed,
+    kind: Side,
     options: &LoopOptions,
 ) -> std::result::Result<Start, DropReason> {
     let (surface, topology) = (cutter.mesh, cutter.topology);
@@ -629,23 +631,18 @@ fn loop_from_seed(
             })
         });
     }
-    // The plane through the saddle first, then parallel ones nearest first.
+    // The plane through the saddle first, then parallel ones nearest first. (A seed
+    // that needs a disk keeps to planes: a membrane's loop is not checked for islands.)
     let step = options.offset_step * surface.bbox_diagonal();
-    // A seed that needs a disk keeps to the plane through it (a parallel plane's point
-    // may lie on the other side of the surface, and its curve bound a disk there), and
-    // to planes (a membrane's loop is not checked for islands).
-    let tried = if seed.disk_only {
-        0
-    } else {
-        options.plane_offsets
-    };
+    let tried = options.plane_offsets;
+    let disk = seed.disk_only.then_some(kind);
     let offsets =
         std::iter::once(0.0).chain((1..=tried).flat_map(|j| [j as f64 * step, -(j as f64) * step]));
     let (mut closed, mut open, mut not_disks) = (0, 0, 0);
     let mut failure = None;
     for offset in offsets {
         let point = add(seed.position, scale(n, offset));
-        let best = around_point(cutter, &normals, point, seed.disk_only);
+        let best = around_point(cutter, &normals, point, disk);
         if offset == 0.0 {
             (closed, open) = (best.1, best.2);
         }
@@ -778,6 +775,7 @@ fn narrowest(
     geometry: &SurfaceGeometry,
     measures: &Measures,
     seed: &Seed,
+    kind: Side,
     c: Candidate,
     options: &LoopOptions,
 ) -> Candidate {
@@ -797,7 +795,8 @@ fn narrowest(
         .par_iter()
         .map(|&offset| {
             let point = add(seed.position, scale(n, offset));
-            let (_, curve) = around_point(cutter, &normals, point, seed.disk_only).0?;
+            let (_, curve) =
+                around_point(cutter, &normals, point, seed.disk_only.then_some(kind)).0?;
             let crossed = curve.crossings.iter().map(|x| x.edge as usize);
             if measures.basis.class_of_crossings(crossed) != c.class {
                 return None;
@@ -833,14 +832,16 @@ fn narrowest(
 }
 
 /// The shortest closed curve around `point` over the planes through it with these
-/// normals, and the closed and open curve counts of the first plane. With
-/// `disk_only`, a curve with another one inside it is passed over ([`Seed::disk_only`]),
-/// and counted in the last number.
+/// normals, and the closed and open curve counts of the first plane. With `disk`
+/// ([`Seed::disk_only`]: the side the loop must bound a disk of), a curve with another
+/// one inside it, or whose region of the plane lies on the other side
+/// ([`cut::region_side`]: `point` was moved across the surface), is passed over, and
+/// counted in the last number.
 fn around_point(
     cutter: &Cutter,
     normals: &[[f64; 3]],
     point: [f64; 3],
-    disk_only: bool,
+    disk: Option<Side>,
 ) -> (Option<(f64, cut::CutCurve)>, usize, usize, usize) {
     let (surface, topology) = (cutter.mesh, cutter.topology);
     let mut best: Option<(f64, cut::CutCurve)> = None;
@@ -856,9 +857,13 @@ fn around_point(
             open = curves.len() - closed;
         }
         if let Some(i) = loop_around(surface, topology, &plane, &curves, point) {
-            if disk_only && encloses_another(surface, topology, &plane, &curves, i) {
-                not_disks += 1;
-                continue;
+            if let Some(side) = disk {
+                if encloses_another(surface, topology, &plane, &curves, i)
+                    || cut::region_side(surface, topology, &plane, &curves[i]) != side
+                {
+                    not_disks += 1;
+                    continue;
+                }
             }
             let curve = curves.swap_remove(i);
             let length = closed_length(&curve.points(surface, topology));

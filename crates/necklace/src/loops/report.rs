@@ -135,9 +135,11 @@ pub enum DropReason {
         offset_step: f64,
     },
     /// A seed that needs a disk ([`Seed::disk_only`](super::Seed::disk_only)): the
-    /// curves around it had other curves inside them, on every plane tried.
+    /// curves around it had other curves inside them, or bounded a region of the other
+    /// side ([`region_side`](super::cut::region_side)), on every plane tried.
     NoDiskAroundSaddle {
-        /// Planes whose curve around the saddle had another inside it.
+        /// Planes whose curve around the saddle had another inside it, or bounded a
+        /// region of the other side.
         planes: usize,
         /// Parallel planes tried on each side.
         offsets_tried: usize,
@@ -259,7 +261,7 @@ impl std::fmt::Display for DropReason {
                 offsets_tried,
             } => write!(
                 f,
-                "no plane's curve around it bounds a disk of its side ({planes} had curves inside them; {offsets_tried} parallel planes tried each side)"
+                "no plane's curve around it bounds a disk of its side ({planes} had curves inside them or on the other side; {offsets_tried} parallel planes tried each side)"
             ),
             DropReason::Collapsed {
                 initial_length,

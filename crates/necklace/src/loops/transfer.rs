@@ -131,7 +131,7 @@ pub fn transfer_loops(
                 let start = match (way, l.initial) {
                     (Way::Same, Initial::Plane) => {
                         let point = add(seed.position, scale(n, l.plane_offset));
-                        around_point(&cutter, &normals, point, seed.disk_only)
+                        around_point(&cutter, &normals, point, seed.disk_only.then_some(l.kind))
                             .0
                             .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
                     }
@@ -151,11 +151,14 @@ pub fn transfer_loops(
                     (Way::Same, Initial::TurnedPlane | Initial::Linked) => None,
                     (Way::Traced, _) => traced(surface, &to.topology, distance, &l.points, options)
                         .map(|(crossings, faces)| (crossings, faces, Vec::new())),
-                    (Way::LoopPlane, _) => {
-                        around_point(&cutter, &[l.normal], l.center, seed.disk_only)
-                            .0
-                            .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
-                    }
+                    (Way::LoopPlane, _) => around_point(
+                        &cutter,
+                        &[l.normal],
+                        l.center,
+                        seed.disk_only.then_some(l.kind),
+                    )
+                    .0
+                    .map(|(_, c)| (c.crossings, c.faces, Vec::new())),
                 };
                 let Some((crossings, faces, sources)) = start else {
                     continue;

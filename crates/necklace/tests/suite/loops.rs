@@ -1397,7 +1397,8 @@ fn a_seed_that_needs_a_disk_keeps_a_curve_only_where_no_other_lies_inside_it() {
     // From a point in the tube, the curve around it is the outer circle, which has
     // the inner one inside it: the plane's region it bounds is an annulus of the solid,
     // not a disk, and the loop (the sum of the tunnel and the rim) bounds nothing
-    // inside. The plane through the axis cuts two separate meridians: disks.
+    // inside; so do the parallel planes'. The plane through the axis cuts two separate
+    // meridians: disks.
     let torus = Shape::new(ShapeKind::Torus).mesh().unwrap();
     let in_tube = |normal| Seed {
         position: [1.0, 0.0, 0.0],
@@ -1413,10 +1414,13 @@ fn a_seed_that_needs_a_disk_keeps_a_curve_only_where_no_other_lies_inside_it() {
     assert_eq!(r.loops[0].seed, 1);
     let tube = 2.0 * PI * 0.3;
     assert!((r.loops[0].length - tube).abs() < 0.01 * tube);
-    assert!(matches!(
-        r.dropped[0].reason,
-        DropReason::NoDiskAroundSaddle { planes: 1, .. }
-    ));
+    // The plane and every parallel one cut two concentric circles.
+    let planes = 1 + 2 * LoopOptions::default().plane_offsets;
+    assert!(
+        matches!(r.dropped[0].reason, DropReason::NoDiskAroundSaddle { planes: p, .. } if p == planes),
+        "{:?}",
+        r.dropped
+    );
     // Without the check the same equatorial seed gives a loop.
     let free = Seed {
         disk_only: false,
@@ -1424,6 +1428,56 @@ fn a_seed_that_needs_a_disk_keeps_a_curve_only_where_no_other_lies_inside_it() {
     };
     let r = find_loops(&torus, &[free], Side::Inside, &LoopOptions::default()).unwrap();
     assert_eq!(r.loops.len(), 1, "{:?}", r.dropped);
+}
+
+#[test]
+fn a_seed_that_needs_a_disk_tries_parallel_planes_and_keeps_a_disk_of_its_own_side() {
+    // On the axis of a torus (R = 1, r = 0.3), above it, the plane z = 0.35 meets
+    // nothing (as where a short hole opens into a wider space and its saddle lies
+    // beyond the hole's end). Parallel planes below cut the tube near its top; the
+    // curve around the axis, the inner circle, bounds the disk across the hole, the
+    // outside's, and tightens to the hole's rim 2π(R − r).
+    let torus = Shape::new(ShapeKind::Torus).mesh().unwrap();
+    let above = Seed {
+        position: [0.0, 0.0, 0.35],
+        normal: [0.0, 0.0, 1.0],
+        persistence: 5,
+        role: Some(necklace::loops::Role::CycleClosing),
+        disk_only: true,
+        ..Seed::default()
+    };
+    let r = find_loops(&torus, &[above], Side::Outside, &LoopOptions::default()).unwrap();
+    assert_eq!(r.loops.len(), 1, "{:?}", r.dropped);
+    assert!(r.loops[0].plane_offset < 0.0);
+    let rim = 2.0 * PI * (1.0 - 0.3);
+    assert!(
+        (r.loops[0].length - rim).abs() < 0.01 * rim,
+        "{}",
+        r.loops[0].length
+    );
+    // Above a ball the parallel planes below cut its cap: a disk of the solid, which a
+    // tunnel loop may not bound, so the seed is dropped for it.
+    let ball = Shape::new(ShapeKind::Sphere);
+    let over = Seed {
+        position: [0.0, 0.0, 1.02 * ball.param("r")],
+        ..above
+    };
+    let r = find_loops(
+        &ball.mesh().unwrap(),
+        &[over],
+        Side::Outside,
+        &LoopOptions::default(),
+    )
+    .unwrap();
+    assert!(r.loops.is_empty());
+    assert!(
+        matches!(
+            r.dropped[0].reason,
+            DropReason::NoDiskAroundSaddle { planes, .. } if planes > 0
+        ),
+        "{:?}",
+        r.dropped
+    );
 }
 
 #[test]
