@@ -92,17 +92,29 @@ fn shortest_through(portals: &[Portal2]) -> (f64, Vec<Apex>, f64) {
         let (len, slope) = length_and_slope(&path, ds, dg);
         (path, len, slope)
     };
-    let (_, _, s0) = eval(0.0);
-    let (_, _, s1) = eval(1.0);
-    let t = if s0 >= 0.0 {
-        0.0
-    } else if s1 <= 0.0 {
-        1.0
-    } else {
-        illinois_root(|t| eval(t).2, s0, s1, 0.0, SLOPE_BRACKET, SLOPE_STEPS)
+    let (path, length, s0) = eval(0.0);
+    if s0 >= 0.0 {
+        return (0.0, path, length);
+    }
+    let (path, length, s1) = eval(1.0);
+    if s1 <= 0.0 {
+        return (1.0, path, length);
+    }
+    // The search ends on the parameter it evaluated last: that funnel is the answer.
+    let mut last = None;
+    let search = |t: f64| {
+        let (path, length, slope) = eval(t);
+        last = Some((t, path, length));
+        slope
     };
-    let (path, length, _) = eval(t);
-    (t, path, length)
+    let t = illinois_root(search, s0, s1, 0.0, SLOPE_BRACKET, SLOPE_STEPS);
+    match last {
+        Some((at, path, length)) if at == t => (t, path, length),
+        _ => {
+            let (path, length, _) = eval(t);
+            (t, path, length)
+        }
+    }
 }
 
 /// One crossing per strip portal (in strip order) of the funnel `path` through the
