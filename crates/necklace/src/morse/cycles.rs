@@ -40,9 +40,13 @@ use crate::tet::{TetMesh, VertexKind};
 pub struct Cocycles {
     /// Words per edge value (parameters ≤ 64 × words).
     words: usize,
-    /// Per slot of the adjacency (`start`/`neighbours` of the sweep, both directions):
-    /// its edge's value, `words` words; zero when the edge is not in `X`.
+    /// Per edge of `X`: its value, `words` words; then one value of zeros, for the
+    /// slots whose edge is not in `X`.
     values: Vec<u64>,
+    /// Per slot of the adjacency (`start`/`neighbours` of the sweep, both directions):
+    /// the index of its edge's value in `values`. (One value per edge, not per slot:
+    /// on a genus-1409 sponge's shell the values are most of the Morse stage's memory.)
+    value_of_slot: Vec<u32>,
     /// The relations among the parameters, in echelon form.
     relations: Z2Basis,
     /// Parameters that lead no relation: the class coordinates.
@@ -242,16 +246,16 @@ impl Cocycles {
             }
         }
 
-        // Per slot, from both ends.
-        let mut slot_values = vec![0u64; neighbours.len() * words];
+        // Per slot, from both ends: its edge's value, or the zeros after the last edge.
+        let zero = ends.len() as u32;
+        values.resize((ends.len() + 1) * words, 0);
+        let mut value_of_slot = vec![zero; if words > 0 { neighbours.len() } else { 0 }];
         if words > 0 {
             for v in 0..n {
                 for s in start[v]..start[v + 1] {
                     let e = edge(v as u32, neighbours[s]);
                     if e != u32::MAX {
-                        let e = e as usize;
-                        slot_values[s * words..(s + 1) * words]
-                            .copy_from_slice(&values[e * words..(e + 1) * words]);
+                        value_of_slot[s] = e;
                     }
                 }
             }
@@ -280,7 +284,8 @@ impl Cocycles {
         let free = (0..parameters as usize).filter(|&p| !leads[p]).collect();
         Cocycles {
             words,
-            values: slot_values,
+            values,
+            value_of_slot,
             relations,
             free,
             parameters: parameters as usize,
@@ -299,7 +304,11 @@ impl Cocycles {
 
     /// The value of the edge at adjacency slot `slot` (either end's slot).
     pub fn value(&self, slot: usize) -> &[u64] {
-        &self.values[slot * self.words..(slot + 1) * self.words]
+        if self.words == 0 {
+            return &[];
+        }
+        let e = self.value_of_slot[slot] as usize;
+        &self.values[e * self.words..(e + 1) * self.words]
     }
 
     /// The class in H₁(X; Z2) of a cycle whose edge values sum to `sum` (consumed):
