@@ -159,6 +159,19 @@ const BOUNDARY: VertexClass = VertexClass {
     euler_term: 0,
 };
 
+/// Vertices whose links [`Links::new`] builds in one piece of work.
+const LINK_RUN: usize = 4096;
+
+/// The links of a run of vertices, one after the other, and where each vertex's ends
+/// in the three arrays.
+#[derive(Default)]
+struct LinkRun {
+    vertices: Vec<u32>,
+    edges: Vec<[u16; 2]>,
+    triangles: Vec<[u16; 3]>,
+    ends: Vec<[usize; 3]>,
+}
+
 /// One vertex's link in local indices.
 struct Link {
     vertices: Vec<u32>,
@@ -170,34 +183,57 @@ impl Links {
     /// Build the link of every interior vertex. Fails only when a vertex has more than
     /// 65535 link vertices.
     pub fn new(mesh: &TetMesh) -> Result<Links> {
-        let per_vertex: Vec<Option<Link>> = (0..mesh.num_vertices() as u32)
+        // Built in runs of vertices, each into flat arrays of its own, then copied into
+        // arrays reserved at their final length: a vector per link, at its capacity
+        // before duplicates were removed, held several times the links' size (and
+        // arrays grown by doubling up to three times theirs), the analysis's peak.
+        let n = mesh.num_vertices();
+        let runs: Vec<LinkRun> = (0..n.div_ceil(LINK_RUN))
             .into_par_iter()
-            .map(|v| {
-                if mesh.kinds[v as usize] == VertexKind::Interior {
-                    link_of(mesh, v).map(Some)
-                } else {
-                    Ok(None)
+            .map(|r| {
+                let mut run = LinkRun::default();
+                for v in r * LINK_RUN..n.min((r + 1) * LINK_RUN) {
+                    if mesh.kinds[v] == VertexKind::Interior {
+                        let link = link_of(mesh, v as u32)?;
+                        run.vertices.extend(&link.vertices);
+                        run.edges.extend(&link.edges);
+                        run.triangles.extend(&link.triangles);
+                    }
+                    run.ends
+                        .push([run.vertices.len(), run.edges.len(), run.triangles.len()]);
                 }
+                Ok(run)
             })
             .collect::<Result<_>>()?;
+        let total = |size: fn(&LinkRun) -> usize| runs.iter().map(size).sum();
+        let starts = || {
+            let mut start = Vec::with_capacity(n + 1);
+            start.push(0);
+            start
+        };
         let mut links = Links {
             kinds: mesh.kinds.clone(),
-            vertex_start: vec![0],
-            vertices: Vec::new(),
-            edge_start: vec![0],
-            edges: Vec::new(),
-            triangle_start: vec![0],
-            triangles: Vec::new(),
+            vertex_start: starts(),
+            vertices: Vec::with_capacity(total(|r| r.vertices.len())),
+            edge_start: starts(),
+            edges: Vec::with_capacity(total(|r| r.edges.len())),
+            triangle_start: starts(),
+            triangles: Vec::with_capacity(total(|r| r.triangles.len())),
         };
-        for link in per_vertex.iter().map(Option::as_ref) {
-            if let Some(link) = link {
-                links.vertices.extend(&link.vertices);
-                links.edges.extend(&link.edges);
-                links.triangles.extend(&link.triangles);
+        for run in runs {
+            let offsets = [
+                links.vertices.len(),
+                links.edges.len(),
+                links.triangles.len(),
+            ];
+            for end in &run.ends {
+                links.vertex_start.push(offsets[0] + end[0]);
+                links.edge_start.push(offsets[1] + end[1]);
+                links.triangle_start.push(offsets[2] + end[2]);
             }
-            links.vertex_start.push(links.vertices.len());
-            links.edge_start.push(links.edges.len());
-            links.triangle_start.push(links.triangles.len());
+            links.vertices.extend(run.vertices);
+            links.edges.extend(run.edges);
+            links.triangles.extend(run.triangles);
         }
         Ok(links)
     }

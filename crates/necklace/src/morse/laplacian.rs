@@ -189,10 +189,13 @@ pub fn cotangent_stiffness(mesh: &TetMesh) -> SparseMatrix {
             row
         })
         .collect();
+    // Reserved at their final length: grown by doubling, the two arrays could hold
+    // twice the entries for as long as the matrix lives.
+    let entries = rows.iter().map(Vec::len).sum();
     let mut row_start = Vec::with_capacity(rows.len() + 1);
     row_start.push(0);
-    let mut cols = Vec::new();
-    let mut vals = Vec::new();
+    let mut cols = Vec::with_capacity(entries);
+    let mut vals = Vec::with_capacity(entries);
     for row in rows {
         for (c, x) in row {
             cols.push(c);

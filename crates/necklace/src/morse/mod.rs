@@ -376,6 +376,9 @@ pub fn analyze_with_progress(
         ..options.solver
     };
     let mut solver = HeatSolver::new(&stiffness, &mass, &fixed, field, first_tau, solver_options);
+    // The solver holds the free rows it needs; the whole matrix would stay for the
+    // analysis's length.
+    drop(stiffness);
     let floor = options
         .drained_floor
         .max(DRAINED * solver_options.tolerance);

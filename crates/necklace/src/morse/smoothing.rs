@@ -123,9 +123,20 @@ impl HeatSolver {
         for (i, &v) in free.iter().enumerate() {
             local[v as usize] = i as u32;
         }
-        let mut row_start = vec![0usize];
-        let mut cols = Vec::new();
-        let mut stiffness_values = Vec::new();
+        // The free rows' free entries, and a diagonal where a row has none: reserved
+        // once at that length, as the matrix is the run's largest array.
+        let entries: usize = free
+            .iter()
+            .map(|&v| {
+                let row = || stiffness.row(v as usize).map(|(c, _)| c);
+                row().filter(|&c| local[c as usize] != u32::MAX).count()
+                    + usize::from(!row().any(|c| c == v))
+            })
+            .sum();
+        let mut row_start = Vec::with_capacity(free.len() + 1);
+        row_start.push(0usize);
+        let mut cols = Vec::with_capacity(entries);
+        let mut stiffness_values = Vec::with_capacity(entries);
         let mut diagonal_index = vec![usize::MAX; free.len()];
         let mut boundary_stiffness = Vec::with_capacity(free.len());
         for (i, &v) in free.iter().enumerate() {
