@@ -434,6 +434,26 @@ mod tests {
     }
 
     #[test]
+    fn an_edge_out_of_x_reads_zero_and_edges_share_their_values() {
+        // Vertex 0 on the surface: the ring still closes through the other two
+        // vertices of its section.
+        let ring = solid_ring(8);
+        let mut kinds = ring.kinds.clone();
+        kinds[0] = VertexKind::Surface;
+        let mesh = TetMesh::new(ring.positions.clone(), ring.tets.clone(), kinds).unwrap();
+        let (start, nb) = adjacency(&mesh);
+        let c = Cocycles::new(&mesh, &start, &nb);
+        assert_eq!(c.rank(), 1);
+        let slot = start[1] + nb[start[1]..start[2]].binary_search(&0).unwrap();
+        assert!(c.value(slot).iter().all(|&x| x == 0));
+        let other: Vec<u32> = (0..8).map(|i| 3 * i + 2).collect();
+        assert_eq!(c.class(&mut cycle_sum(&c, &start, &nb, &other)), vec![1]);
+        // One parameter: at most the zero value and the parameter's.
+        assert_eq!(c.parameters, 1);
+        assert!(c.values.len() <= 2 * c.words());
+    }
+
+    #[test]
     fn a_ball_has_no_class() {
         // One prism of the ring: a ball.
         let ring = solid_ring(8);
