@@ -67,6 +67,9 @@ enum Source {
     Triangle(u32),
 }
 
+/// Tets whose faces [`Cocycles::new`] writes in one piece of work.
+const FACE_RUN: usize = 16_384;
+
 /// Every edge's value (a parameter's unit vector, or the sum of the other two edges of
 /// its triangle, in `order`; the gauge's edges 0) as the index of that value among the
 /// distinct ones, and those values, `words` words each, the zero value first. Built a
@@ -163,32 +166,49 @@ impl Cocycles {
                 .map_or(u32::MAX, |i| edge_of_slot[start[a] + i])
         };
 
-        // Triangles of X (faces of tets with three vertices in X), each once.
-        let mut faces: Vec<[u32; 3]> = mesh
-            .tets
-            .par_iter()
-            .flat_map_iter(|t| {
-                [
-                    [t[0], t[1], t[2]],
-                    [t[0], t[1], t[3]],
-                    [t[0], t[2], t[3]],
-                    [t[1], t[2], t[3]],
-                ]
-                .into_iter()
-                .filter(|f| f.iter().all(|&v| in_x[v as usize]))
-                .map(|mut f| {
-                    f.sort_unstable();
-                    f
-                })
+        // Triangles of X (faces of tets with three vertices in X), each once, as their
+        // three edges: counted, written into one array of that length, sorted, shrunk
+        // once the duplicates are gone and rewritten in place. (A parallel collect and
+        // a second array held them several times over, the peak of a side's Morse
+        // stage.)
+        let faces_of = |t: &[u32; 4]| {
+            [
+                [t[0], t[1], t[2]],
+                [t[0], t[1], t[3]],
+                [t[0], t[2], t[3]],
+                [t[1], t[2], t[3]],
+            ]
+            .into_iter()
+            .filter(|f| f.iter().all(|&v| in_x[v as usize]))
+            .map(|mut f| {
+                f.sort_unstable();
+                f
             })
-            .collect();
-        faces.par_sort_unstable();
-        faces.dedup();
-        let triangles: Vec<[u32; 3]> = faces
+        };
+        let runs: Vec<&[[u32; 4]]> = mesh.tets.chunks(FACE_RUN).collect();
+        let counts: Vec<usize> = runs
             .par_iter()
-            .map(|&[a, b, c]| [edge(a, b), edge(a, c), edge(b, c)])
+            .map(|run| run.iter().map(|t| faces_of(t).count()).sum())
             .collect();
-        drop(faces);
+        let mut triangles = vec![[0u32; 3]; counts.iter().sum()];
+        let mut parts = Vec::with_capacity(runs.len());
+        let mut rest = &mut triangles[..];
+        for &count in &counts {
+            let (part, tail) = rest.split_at_mut(count);
+            parts.push(part);
+            rest = tail;
+        }
+        parts.into_par_iter().zip(&runs).for_each(|(part, run)| {
+            for (slot, f) in part.iter_mut().zip(run.iter().flat_map(faces_of)) {
+                *slot = f;
+            }
+        });
+        triangles.par_sort_unstable();
+        triangles.dedup();
+        triangles.shrink_to_fit();
+        triangles
+            .par_iter_mut()
+            .for_each(|f| *f = [edge(f[0], f[1]), edge(f[0], f[2]), edge(f[1], f[2])]);
 
         // 1. The gauge: a spanning forest and the cone's edges are 0.
         let mut known = vec![false; ends.len()];

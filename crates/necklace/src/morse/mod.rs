@@ -358,8 +358,12 @@ pub fn analyze_with_progress(
 ) -> Result<MorseResult> {
     check_inputs(mesh, field, options)?;
 
-    // 1. Operators, the reduced heat system, the links and the adjacency (once).
+    // 1. The adjacency and its cocycles, the operators, the reduced heat system and the
+    //    links (once). The sweep first: building the cocycles takes several arrays the
+    //    size of the mesh's triangles for a while, which would otherwise come on top of
+    //    the solver and the links (a side's peak).
     let start = Instant::now();
+    let sweep = Sweep::new(mesh);
     let stiffness = cotangent_stiffness(mesh);
     let mass = lumped_mass(mesh);
     let fixed: Vec<bool> = (0..mesh.num_vertices())
@@ -384,7 +388,6 @@ pub fn analyze_with_progress(
         .max(DRAINED * solver_options.tolerance);
     let links = Links::new(mesh)?;
     let mut sides = LinkSides::default();
-    let sweep = Sweep::new(mesh);
     let morse_expected = expected_morse_sum(mesh);
     let mut timings = MorseTimings {
         assembly: start.elapsed().as_secs_f64(),
