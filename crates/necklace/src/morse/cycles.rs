@@ -474,6 +474,62 @@ mod tests {
     }
 
     #[test]
+    fn distinct_values_over_several_words_are_the_values_summed_in_full() {
+        // 130 parameters (three words) on edges 0..130, then 70 edges each the sum of
+        // two earlier ones (every tenth an edge with itself: zero), against the values summed
+        // with all their words at once.
+        let (parameters, edges) = (130usize, 200usize);
+        let words = parameters.div_ceil(64);
+        let mut order: Vec<(u32, Source)> = (0..parameters as u32)
+            .map(|p| (p, Source::Parameter(p)))
+            .collect();
+        let mut triangles = Vec::new();
+        let mut seed = 12345u64;
+        for e in parameters..edges {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let a = (seed >> 33) as usize % e;
+            let b = if e % 10 == 0 {
+                a
+            } else {
+                (seed >> 13) as usize % e
+            };
+            triangles.push([e as u32, a as u32, b as u32]);
+            order.push((e as u32, Source::Triangle(triangles.len() as u32 - 1)));
+        }
+        let mut full = vec![0u64; edges * words];
+        for &(e, source) in &order {
+            let e = e as usize;
+            match source {
+                Source::Parameter(p) => full[e * words + p as usize / 64] |= 1 << (p % 64),
+                Source::Triangle(t) => {
+                    for &other in &triangles[t as usize] {
+                        let other = other as usize;
+                        if other != e {
+                            for w in 0..words {
+                                full[e * words + w] ^= full[other * words + w];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let (values, index) = distinct_values(&order, &triangles, edges, words);
+        assert!(values[..words].iter().all(|&x| x == 0));
+        for e in 0..edges {
+            let i = index[e] as usize;
+            assert_eq!(
+                &values[i * words..(i + 1) * words],
+                &full[e * words..(e + 1) * words]
+            );
+        }
+        let distinct: std::collections::HashSet<&[u64]> = full.chunks(words).collect();
+        let zero = usize::from(!distinct.contains(&[0u64; 3][..]));
+        assert_eq!(values.len() / words, distinct.len() + zero);
+    }
+
+    #[test]
     fn a_ball_has_no_class() {
         // One prism of the ring: a ball.
         let ring = solid_ring(8);
