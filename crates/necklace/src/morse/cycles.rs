@@ -28,10 +28,9 @@
 //! H¹(X; Z2). Entry point: [`Cocycles::new`]. Sequential and ordered by index: the
 //! result does not depend on the thread count.
 
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 
 use rayon::prelude::*;
-use rustc_hash::FxHashMap as HashMap;
 
 use crate::mesh::Z2Basis;
 use crate::tet::{TetMesh, VertexKind};
@@ -106,7 +105,7 @@ fn distinct_values(
             }
         }
         let mut level = vec![(0u32, 0u64)];
-        let mut seen: HashMap<(u32, u64), u32> = HashMap::default();
+        let mut seen: HashMap<(u32, u64), u32> = HashMap::new();
         for (i, &x) in index.iter_mut().zip(&word) {
             let key = (*i, x);
             if key != (0, 0) {
