@@ -1,9 +1,10 @@
 //! Step 2 of the tightening: the shortest closed path homotopic to the strip's core.
 //! [`shortest_closed_path`] reads as its three parts: choose the anchor portal
 //! ([`choose_anchor`]: where the last path crossed farthest from a vertex), find the
-//! anchor parameter that minimises the length (the length is convex in it; a
-//! safeguarded regula falsi on its slope, `geom::illinois_root`), and turn the funnel
-//! path back into one crossing per portal ([`portal_crossings`]).
+//! anchor parameter that minimises the length (the length is convex in it: Newton steps
+//! on its slope from the last round's crossing, else a safeguarded regula falsi,
+//! `geom::illinois_root`), and turn the funnel path back into one crossing per portal
+//! ([`portal_crossings`]).
 //!
 //! Conventions: portal parameters run from the left vertex (0) to the right one (1) in
 //! the unfolding, and from the edge's first stored vertex in a [`PortalCrossing`].
@@ -18,6 +19,10 @@ const SLOPE_BRACKET: f64 = 1e-13;
 
 /// Most evaluations of the anchor search.
 const SLOPE_STEPS: usize = 100;
+
+/// Most Newton steps from the last round's anchor parameter before the bracketed search
+/// takes over.
+const NEWTON_STEPS: usize = 8;
 
 /// A crossing within this portal parameter of an endpoint is at that vertex: rounding
 /// must not leave a point a hair away from a vertex the path really passes through.
@@ -44,7 +49,16 @@ pub(super) fn shortest_closed_path(
     }
     let anchor = choose_anchor(strip);
     let portals = unfold(geometry, strip, anchor)?;
-    let (t, path, length) = shortest_through(&portals);
+    // The last path's crossing of the anchor, from the left vertex.
+    let guess = Some(strip.hint[anchor]).filter(|t| !t.is_nan()).map(|t| {
+        let [a, _] = geometry.edge(strip.portals[anchor]);
+        if portals[0].lv == a {
+            t
+        } else {
+            1.0 - t
+        }
+    });
+    let (t, path, length) = shortest_through(&portals, guess);
     let crossings = portal_crossings(geometry, strip, anchor, &portals, &path, t)?;
     for (i, c) in crossings.iter().enumerate() {
         strip.hint[i] = if c.vertex.is_some() { f64::NAN } else { c.t };
@@ -69,9 +83,12 @@ fn choose_anchor(strip: &Strip) -> usize {
 }
 
 /// The anchor parameter `t` of the shortest path from the first portal to its image on
-/// the last, the funnel path there and its length. The length is convex in `t`:
-/// regula falsi (Illinois) on its slope, or an end where the slope does not change sign.
-fn shortest_through(portals: &[Portal2]) -> (f64, Vec<Apex>, f64) {
+/// the last, the funnel path there and its length. The length is convex in `t`. From
+/// `guess` (the last round's crossing: the path moves little between rounds), Newton
+/// steps on the slope ([`newton`]); where they do not settle, regula falsi (Illinois)
+/// on the slope over the bracket they left, or an end of `[0, 1]` where the slope does
+/// not change sign.
+fn shortest_through(portals: &[Portal2], guess: Option<f64>) -> (f64, Vec<Apex>, f64) {
     let n = portals.len() - 1;
     let (p0, pn) = (portals[0], portals[n]);
     let ds = [p0.right[0] - p0.left[0], p0.right[1] - p0.left[1]];
@@ -89,32 +106,93 @@ fn shortest_through(portals: &[Portal2]) -> (f64, Vec<Apex>, f64) {
             )
         };
         let path = funnel(s, g, portals, end_vertex);
-        let (len, slope) = length_and_slope(&path, ds, dg);
-        (path, len, slope)
+        let (len, slope, curvature) = length_and_slope(&path, ds, dg);
+        (path, len, slope, curvature)
     };
-    let (path, length, s0) = eval(0.0);
-    if s0 >= 0.0 {
-        return (0.0, path, length);
+    // The bracket: a parameter of negative slope (or 0) and one of positive slope (or
+    // 1), with the slope where it has been evaluated.
+    let mut lo: (f64, Option<f64>) = (0.0, None);
+    let mut hi: (f64, Option<f64>) = (1.0, None);
+    if let Some(t) = guess.filter(|t| *t > 0.0 && *t < 1.0) {
+        if let Some(found) = newton(&eval, t, &mut lo, &mut hi) {
+            return found;
+        }
     }
-    let (path, length, s1) = eval(1.0);
-    if s1 <= 0.0 {
-        return (1.0, path, length);
-    }
+    let s0 = match lo.1 {
+        Some(slope) => slope,
+        None => {
+            let (path, length, slope, _) = eval(0.0);
+            if slope >= 0.0 {
+                return (0.0, path, length);
+            }
+            slope
+        }
+    };
+    let s1 = match hi.1 {
+        Some(slope) => slope,
+        None => {
+            let (path, length, slope, _) = eval(1.0);
+            if slope <= 0.0 {
+                return (1.0, path, length);
+            }
+            slope
+        }
+    };
     // The search ends on the parameter it evaluated last: that funnel is the answer.
+    let (start, width) = (lo.0, hi.0 - lo.0);
     let mut last = None;
-    let search = |t: f64| {
-        let (path, length, slope) = eval(t);
+    let search = |u: f64| {
+        let t = start + u * width;
+        let (path, length, slope, _) = eval(t);
         last = Some((t, path, length));
         slope
     };
-    let t = illinois_root(search, s0, s1, 0.0, SLOPE_BRACKET, SLOPE_STEPS);
+    let u = illinois_root(search, s0, s1, 0.0, SLOPE_BRACKET / width, SLOPE_STEPS);
+    let t = start + u * width;
     match last {
         Some((at, path, length)) if at == t => (t, path, length),
         _ => {
-            let (path, length, _) = eval(t);
+            let (path, length, _, _) = eval(t);
             (t, path, length)
         }
     }
+}
+
+/// Newton steps on the slope of a convex length from `t` inside `(0, 1)`: the parameter
+/// where a step is below [`SLOPE_BRACKET`] (or the slope is zero), with its path and
+/// length. Every evaluation narrows the bracket `lo`, `hi` (a negative slope moves
+/// `lo`, a positive one `hi`). `None` where a step leaves that bracket (the minimum at
+/// an end, or a step past a change of the funnel's bends), the curvature is not
+/// positive, or [`NEWTON_STEPS`] steps do not settle.
+fn newton(
+    eval: &impl Fn(f64) -> (Vec<Apex>, f64, f64, f64),
+    mut t: f64,
+    lo: &mut (f64, Option<f64>),
+    hi: &mut (f64, Option<f64>),
+) -> Option<(f64, Vec<Apex>, f64)> {
+    for _ in 0..NEWTON_STEPS {
+        let (path, length, slope, curvature) = eval(t);
+        if slope == 0.0 {
+            return Some((t, path, length));
+        }
+        if slope < 0.0 {
+            *lo = (t, Some(slope));
+        } else {
+            *hi = (t, Some(slope));
+        }
+        if curvature.is_nan() || curvature <= 0.0 {
+            return None;
+        }
+        let next = t - slope / curvature;
+        if (next - t).abs() <= SLOPE_BRACKET {
+            return Some((t, path, length));
+        }
+        if !(next > lo.0 && next < hi.0) {
+            return None;
+        }
+        t = next;
+    }
+    None
 }
 
 /// One crossing per strip portal (in strip order) of the funnel `path` through the
@@ -226,4 +304,87 @@ fn portal_crossings(
         crossings[(anchor + k) % n] = c?;
     }
     Some(crossings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A corridor of `n` portals at x = 0, 1, …, each open between pseudo-random
+    /// heights, closed by the first portal's image: turned by `turn` about its right
+    /// end and moved to x = n, as an unfolded strip's anchor comes back.
+    fn corridor(seed: u64, n: usize, turn: f64) -> Vec<Portal2> {
+        // A multiplicative hash of (seed, draw) in [0, 1).
+        let mut draw = 0u64;
+        let mut next = || {
+            draw += 1;
+            ((seed * 7919 + draw) * 2_654_435_761 % 1_000_003) as f64 / 1_000_003.0
+        };
+        let mut portals: Vec<Portal2> = (0..n)
+            .map(|i| {
+                let low = next() - 1.0;
+                let high = low + 0.2 + 1.5 * next();
+                let x = i as f64;
+                Portal2 {
+                    left: [x, high],
+                    right: [x, low],
+                    lv: 2 * i as u32,
+                    rv: 2 * i as u32 + 1,
+                }
+            })
+            .collect();
+        let first = portals[0];
+        let d = [
+            first.left[0] - first.right[0],
+            first.left[1] - first.right[1],
+        ];
+        let (c, s) = (turn.cos(), turn.sin());
+        let right = [n as f64, first.right[1]];
+        portals.push(Portal2 {
+            left: [
+                right[0] + c * d[0] - s * d[1],
+                right[1] + s * d[0] + c * d[1],
+            ],
+            right,
+            lv: first.lv,
+            rv: first.rv,
+        });
+        portals
+    }
+
+    #[test]
+    fn the_anchor_search_finds_the_shortest_path_from_any_guess() {
+        // Ground truth independent of both searches: the shortest of the funnel paths
+        // over a fine grid of anchor parameters.
+        for seed in 0..60 {
+            for turn in [-0.4, 0.0, 0.4] {
+                let portals = corridor(seed, 7, turn);
+                let n = portals.len() - 1;
+                let (p0, pn) = (portals[0], portals[n]);
+                let grid = (0..=2000)
+                    .map(|i| {
+                        let t = f64::from(i) / 2000.0;
+                        let s = lerp2(p0.left, p0.right, t);
+                        let g = lerp2(pn.left, pn.right, t);
+                        let path = funnel(s, g, &portals, None);
+                        path.windows(2)
+                            .map(|w| dist2(w[0].pos, w[1].pos))
+                            .sum::<f64>()
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                let (_, _, searched) = shortest_through(&portals, None);
+                assert!(searched <= grid + 1e-12, "seed {seed}: {searched} > {grid}");
+                for guess in [0.02, 0.3, 0.5, 0.77, 0.98] {
+                    let (t, path, length) = shortest_through(&portals, Some(guess));
+                    assert!(
+                        (length - searched).abs() <= 1e-12 * searched,
+                        "seed {seed} turn {turn} guess {guess}: {length} against {searched}"
+                    );
+                    let summed: f64 = path.windows(2).map(|w| dist2(w[0].pos, w[1].pos)).sum();
+                    assert_eq!(summed, length);
+                    assert!((0.0..=1.0).contains(&t));
+                }
+            }
+        }
+    }
 }

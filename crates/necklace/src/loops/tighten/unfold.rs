@@ -199,16 +199,29 @@ pub(super) fn funnel(
     path
 }
 
-/// Length of a funnel path and its derivative with respect to the anchor parameter,
-/// given how the start and goal move (`ds`, `dg` per unit parameter).
-pub(super) fn length_and_slope(path: &[Apex], ds: [f64; 2], dg: [f64; 2]) -> (f64, f64) {
+/// Length of a funnel path and its first and second derivatives with respect to the
+/// anchor parameter, given how the start and goal move (`ds`, `dg` per unit parameter),
+/// the path's bend points held still. A segment of length `d` whose end moves by `v`
+/// turns, and its length's second derivative is `(|v|² − (e·v)²) / d` (`e` its unit
+/// direction); the second derivative is 0 where an end segment has no length.
+pub(super) fn length_and_slope(path: &[Apex], ds: [f64; 2], dg: [f64; 2]) -> (f64, f64, f64) {
     let length: f64 = path.windows(2).map(|w| dist2(w[0].pos, w[1].pos)).sum();
+    let dot = |a: [f64; 2], b: [f64; 2]| a[0] * b[0] + a[1] * b[1];
+    // The unit vector from b to a, the length of that segment.
     let unit = |a: [f64; 2], b: [f64; 2]| {
         let d = dist2(a, b);
         if d > 0.0 {
-            [(a[0] - b[0]) / d, (a[1] - b[1]) / d]
+            ([(a[0] - b[0]) / d, (a[1] - b[1]) / d], d)
         } else {
-            [0.0, 0.0]
+            ([0.0, 0.0], 0.0)
+        }
+    };
+    // The second derivative of a segment's length whose end moves by `v`.
+    let bend = |(e, d): ([f64; 2], f64), v: [f64; 2]| {
+        if d > 0.0 {
+            (dot(v, v) - dot(e, v) * dot(e, v)).max(0.0) / d
+        } else {
+            0.0
         }
     };
     // Bend points at the same place as an end do not count.
@@ -219,15 +232,16 @@ pub(super) fn length_and_slope(path: &[Apex], ds: [f64; 2], dg: [f64; 2]) -> (f6
         .filter(|&p| p != s && p != g)
         .collect();
     let k = inner.len() + 2;
-    let slope = if k == 2 {
+    let (slope, curvature) = if k == 2 {
         let e = unit(g, s);
-        e[0] * (dg[0] - ds[0]) + e[1] * (dg[1] - ds[1])
+        let w = [dg[0] - ds[0], dg[1] - ds[1]];
+        (dot(e.0, w), bend(e, w))
     } else {
         let a = unit(s, inner[0]);
         let b = unit(g, inner[k - 3]);
-        a[0] * ds[0] + a[1] * ds[1] + b[0] * dg[0] + b[1] * dg[1]
+        (dot(a.0, ds) + dot(b.0, dg), bend(a, ds) + bend(b, dg))
     };
-    (length, slope)
+    (length, slope, curvature)
 }
 
 #[cfg(test)]
@@ -258,14 +272,14 @@ mod tests {
         let portals = corridor();
         let path = funnel([0.0, 0.5], [3.0, 0.5], &portals, None);
         assert_eq!(path.len(), 2, "{path:?}");
-        let (length, slope) = length_and_slope(&path, [0.0, -1.0], [0.0, -1.0]);
+        let (length, slope, _) = length_and_slope(&path, [0.0, -1.0], [0.0, -1.0]);
         assert!((length - 3.0).abs() < 1e-15);
         // Moving both ends the same way leaves the length unchanged.
         assert!(slope.abs() < 1e-15);
         // A diagonal from corner to corner stays straight too: √(3² + 1²).
         let path = funnel([0.0, 0.0], [3.0, 1.0], &portals, None);
         assert_eq!(path.len(), 2, "{path:?}");
-        let (length, _) = length_and_slope(&path, [0.0, -1.0], [0.0, -1.0]);
+        let (length, _, _) = length_and_slope(&path, [0.0, -1.0], [0.0, -1.0]);
         assert!((length - 10f64.sqrt()).abs() < 1e-15);
     }
 
@@ -282,10 +296,12 @@ mod tests {
         let bends: Vec<Option<u32>> = path.iter().map(|a| a.vertex).collect();
         assert_eq!(bends, [None, Some(11), None]);
         assert_eq!(path[1].pos, [1.0, 1.0]);
-        let (length, slope) = length_and_slope(&path, [0.0, -2.0], [0.0, -2.0]);
+        let (length, slope, curvature) = length_and_slope(&path, [0.0, -2.0], [0.0, -2.0]);
         assert!((length - 2.0 * 2f64.sqrt()).abs() < 1e-15);
-        // Lowering both ends lengthens both legs: d/dt = 2 · 2 · (1/√2) = 2√2.
+        // Lowering both ends by 2t lengthens both legs, L(t) = 2 √(1 + (1 + 2t)²):
+        // L'(0) = 2 · 2 · (1/√2) = 2√2, and L''(0) = 2 (4/√2 − 4/(2√2)) = 2√2.
         assert!((slope - 2.0 * 2f64.sqrt()).abs() < 1e-12, "{slope}");
+        assert!((curvature - 2.0 * 2f64.sqrt()).abs() < 1e-12, "{curvature}");
     }
 
     #[test]
@@ -347,7 +363,7 @@ mod tests {
             &unfolded,
             None,
         );
-        let (length, _) = length_and_slope(&path, [0.0; 2], [0.0; 2]);
+        let (length, _, _) = length_and_slope(&path, [0.0; 2], [0.0; 2]);
         assert!((length - 4.0).abs() < 1e-12, "{length}");
     }
 }
