@@ -361,6 +361,7 @@ impl NeckArgs {
             morse: self.method.morse(),
             keep_volume,
             sides_at_once: !self.one_side_at_a_time,
+            at_once_max_tets: NeckOptions::default().at_once_max_tets,
             budget_steps: self.budget_steps,
             input: self.method.input.options(),
             simplify: SimplifyOptions {

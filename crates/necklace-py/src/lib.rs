@@ -169,6 +169,7 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
             !NeckOptions::default().sides_at_once,
         )?,
         budget_steps: option(options, "budget_steps", NeckOptions::default().budget_steps)?,
+        at_once_max_tets: NeckOptions::default().at_once_max_tets,
     })
 }
 

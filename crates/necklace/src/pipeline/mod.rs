@@ -40,7 +40,10 @@
 //! 7. the loops' surface points renumbered to the input's vertices.
 //!
 //! The two sides run at the same time (`rayon::join`, each reporting on its own
-//! [`Lane`]; `sides_at_once: false` runs them one after the other). Each side's stage
+//! [`Lane`]; `sides_at_once: false` runs them one after the other): their volume meshes,
+//! then their analyses (steps 3–6), which run one after the other where the two meshes
+//! are large ([`NeckOptions::at_once_max_tets`]; with budget steps each side meshes and
+//! analyses in turns). Each side's stage
 //! timings are laps of its own clock, so they add up to the side's time; the run's
 //! `seconds` is its own wall clock (less than the input's time, [`NeckTimings::input`],
 //! plus both sides'). [`find_necks_with_progress`] reports progress; the crate re-exports
@@ -140,6 +143,15 @@ pub struct NeckOptions {
     /// after the other, with the larger side's peak memory instead of both sides'.
     /// The results are the same.
     pub sides_at_once: bool,
+    /// With both sides at once and no budget steps: the two volume meshes are made at
+    /// the same time, and their analyses (distance field, Morse stage, loops) run at
+    /// the same time only while the meshes hold at most this many tets together
+    /// (default 5 M), else one after the other. Most of a side's peak memory is its
+    /// analysis, about 300 bytes a tet: both at once would pass 1.5 GB. On
+    /// ps_mk3_bed.stl (8.1 M tets) one after the other took 1384 MiB instead of
+    /// 2229 MiB, and up to a third more time (`docs/decisions.md`). The results are
+    /// the same.
+    pub at_once_max_tets: usize,
     /// When a dense surface is simplified for the volume, field and saddles (the loops
     /// are cut again and tightened on the input; `simplify`).
     pub simplify: SimplifyOptions,
@@ -165,6 +177,7 @@ impl Default for NeckOptions {
             loops: LoopOptions::default(),
             keep_volume: false,
             sides_at_once: true,
+            at_once_max_tets: 5_000_000,
             simplify: SimplifyOptions::default(),
             input: InputOptions::default(),
             budget_steps: false,
@@ -307,9 +320,13 @@ pub fn find_necks_with_progress(
         found
     };
     let runs = match (options.handles, options.tunnels) {
-        (true, true) if options.sides_at_once => {
+        // Budget steps mesh and analyse each side in turns.
+        (true, true) if options.sides_at_once && options.budget_steps => {
             let (inside, outside) = rayon::join(|| run(Side::Inside, 0), || run(Side::Outside, 1));
             vec![inside, outside]
+        }
+        (true, true) if options.sides_at_once => {
+            find_both_sides(work, carry.as_ref(), &survey, options, progress, &failed)
         }
         (true, true) => vec![run(Side::Inside, 0), run(Side::Outside, 1)],
         (true, false) => vec![run(Side::Inside, 0)],
@@ -336,6 +353,77 @@ pub fn find_necks_with_progress(
     // 7. Loops located on the input's vertices (preparing may have dropped unused ones).
     report.index_by_input(&prepared.input_vertex);
     Ok(report)
+}
+
+/// Both sides without budget steps: their volume meshes at the same time, then their
+/// analyses (steps 3–6), at the same time while the two meshes hold at most
+/// [`NeckOptions::at_once_max_tets`] tets, else the inside's then the outside's, with
+/// the peak memory of one analysis instead of both. The results are the same either way; each side's
+/// timings leave out its wait.
+fn find_both_sides(
+    prepared: &PreparedSurface,
+    carry: Option<&Carry>,
+    survey: &SurfaceSurvey,
+    options: &NeckOptions,
+    progress: &dyn Progress,
+    failed: &AtomicBool,
+) -> Vec<Result<Option<SideRun>>> {
+    let lane = |side: Side| Lane {
+        to: progress,
+        lane: usize::from(side == Side::Outside),
+        label: side.name(),
+    };
+    let mesh = |side: Side| {
+        let budget = survey.options.max_memory;
+        let (volume, clock, seconds) =
+            mesh_side(prepared, survey, side, budget, false, &lane(side));
+        if volume.is_err() {
+            failed.store(true, Ordering::Relaxed);
+        }
+        volume.map(|v| (v, clock, seconds))
+    };
+    let genus = surface_genus(prepared);
+    let analyse = |side: Side, meshed: Result<(VolumeResult, Stopwatch, f64)>| {
+        let (volume, mut clock, seconds) = meshed?;
+        if failed.load(Ordering::Relaxed) {
+            return Ok(None);
+        }
+        clock.resume();
+        let found = analyse_side(
+            prepared,
+            carry,
+            side,
+            options,
+            &lane(side),
+            failed,
+            volume,
+            genus,
+            clock,
+        );
+        if found.is_err() {
+            failed.store(true, Ordering::Relaxed);
+        }
+        found.map(|run| {
+            run.map(|mut run| {
+                run.report.timings.volume_mesh = seconds;
+                run
+            })
+        })
+    };
+    let (inside, outside) = rayon::join(|| mesh(Side::Inside), || mesh(Side::Outside));
+    let tets = |m: &Result<(VolumeResult, Stopwatch, f64)>| {
+        m.as_ref().map_or(0, |(v, _, _)| v.mesh.num_tets())
+    };
+    if tets(&inside) + tets(&outside) <= options.at_once_max_tets {
+        let (inside, outside) = rayon::join(
+            || analyse(Side::Inside, inside),
+            || analyse(Side::Outside, outside),
+        );
+        vec![inside, outside]
+    } else {
+        let inside = analyse(Side::Inside, inside);
+        vec![inside, analyse(Side::Outside, outside)]
+    }
 }
 
 /// The volume options of each side: `options.volume` with its memory budget shared by
@@ -379,6 +467,42 @@ fn budget_steps(max_memory: u64, steps: bool) -> Vec<u64> {
     budgets
 }
 
+/// The genus the surface predicts: the sum of its components' (`None` where one has
+/// none).
+fn surface_genus(prepared: &PreparedSurface) -> Option<i64> {
+    prepared
+        .mesh_report
+        .component_details
+        .iter()
+        .map(|c| c.genus)
+        .sum()
+}
+
+/// Step 2 of [`find_necks`]: the volume mesh of one side within `max_memory`, on a
+/// clock started for the side, and its seconds (the clock's first lap).
+fn mesh_side(
+    prepared: &PreparedSurface,
+    survey: &SurfaceSurvey,
+    side: Side,
+    max_memory: u64,
+    stop_when_bound: bool,
+    progress: &dyn Progress,
+) -> (Result<VolumeResult>, Stopwatch, f64) {
+    let mut clock = Stopwatch::start();
+    progress.start("volume mesh", 0);
+    let volume = volume_mesh_within(
+        &prepared.mesh,
+        &prepared.distance,
+        survey,
+        side,
+        max_memory,
+        stop_when_bound,
+    );
+    progress.finish();
+    let seconds = clock.lap();
+    (volume, clock, seconds)
+}
+
 /// One side of the method on a prepared surface, meshed from the run's `survey`: steps
 /// 2–6 of [`find_necks`]; with `carry`, the loops carried back to the input. `None`
 /// when `stop` was raised (the other side failed) before one of its stages.
@@ -401,12 +525,7 @@ fn find_side(
 ) -> Result<Option<SideRun>> {
     let stopped = || stop.load(Ordering::Relaxed);
     let name = side.name();
-    let genus = prepared
-        .mesh_report
-        .component_details
-        .iter()
-        .map(|c| c.genus)
-        .sum::<Option<i64>>();
+    let genus = surface_genus(prepared);
     // Steps only where the mesh's topology can be checked: a genus, and no crossings.
     let checkable = genus.is_some() && prepared.distance.crossings().is_none_or(<[_]>::is_empty);
     let budget = survey.options.max_memory;
@@ -415,19 +534,9 @@ fn find_side(
     let mut notes = Vec::new();
     for (i, &within) in budgets.iter().enumerate() {
         let last = i + 1 == budgets.len();
-        let mut clock = Stopwatch::start();
         // 2. The volume mesh of this side.
-        progress.start("volume mesh", 0);
-        let volume = volume_mesh_within(
-            &prepared.mesh,
-            &prepared.distance,
-            survey,
-            side,
-            within,
-            !last,
-        );
-        progress.finish();
-        let volume_seconds = clock.lap();
+        let (volume, clock, volume_seconds) =
+            mesh_side(prepared, survey, side, within, !last, progress);
         if stopped() {
             return Ok(None);
         }
@@ -866,6 +975,13 @@ impl Stopwatch {
         let seconds = (now - self.last).as_secs_f64();
         self.last = now;
         seconds
+    }
+
+    /// Leave the time since the last lap out of the laps and the total (a wait).
+    fn resume(&mut self) {
+        let now = Instant::now();
+        self.start += now - self.last;
+        self.last = now;
     }
 
     /// Seconds from the start to the last lap: the sum of the laps.

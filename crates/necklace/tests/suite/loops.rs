@@ -1361,11 +1361,14 @@ fn surface_points_index_the_input_even_when_unused_vertices_are_dropped() {
 #[test]
 fn both_sides_at_once_give_the_report_of_one_side_after_the_other() {
     let mesh = Shape::new(ShapeKind::Torus).mesh().unwrap();
-    let run = |sides_at_once: bool| {
+    // At once, the meshes at once then the analyses one after the other (as on
+    // large meshes), and one side after the other.
+    let run = |sides_at_once: bool, at_once_max_tets: usize| {
         let report = find_necks(
             &mesh,
             &NeckOptions {
                 sides_at_once,
+                at_once_max_tets,
                 ..NeckOptions::default()
             },
         )
@@ -1386,9 +1389,10 @@ fn both_sides_at_once_give_the_report_of_one_side_after_the_other() {
         strip(&mut json);
         (report.loops.len(), json)
     };
-    let (at_once, one_by_one) = (run(true), run(false));
+    let at_once = run(true, usize::MAX);
     assert_eq!(at_once.0, 2);
-    assert_eq!(at_once.1, one_by_one.1);
+    assert_eq!(at_once.1, run(true, 0).1);
+    assert_eq!(at_once.1, run(false, usize::MAX).1);
 }
 
 #[test]
