@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 
-use super::{distance_field, prepare_input_with, InputOptions, PreparedSurface};
+use super::{prepare_input_with, volume_field, InputOptions, PreparedSurface};
 use crate::distance::SurfaceDistance;
 use crate::error::Result;
 use crate::mesh::{MeshReport, Side, SurfaceMesh};
@@ -84,7 +84,7 @@ pub fn critical_points_with(
     volume: &VolumeResult,
     options: &MorseOptions,
 ) -> Result<MorseResult> {
-    let field = distance_field(distance, &volume.mesh);
+    let field = volume_field(distance, volume);
     morse::analyze(&volume.mesh, &field, &morse_options_for(options, volume))
 }
 

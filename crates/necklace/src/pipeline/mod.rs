@@ -23,7 +23,9 @@
 //!    sized for thin parts, its topology checked against the surface's), from the one
 //!    survey of the surface both sides share (`volume::survey_surface`: thickness and gaps
 //!    at every vertex, creases, crossings; made before the sides start);
-//! 3. the exact distance field on its vertices ([`distance_field`]);
+//! 3. the exact distance field on its vertices ([`volume_field`]: [`distance_field`], but
+//!    where the surface crosses itself and a vertex's nearest surface point is buried
+//!    in the solid, its distance to the solid's boundary as meshed);
 //! 4. smoothing over scale, critical points and the neck 2-saddles (`morse`);
 //! 5. a loop per saddle ([`loop_seeds`]; `loops`: plane cut, tightening, selection; on the
 //!    volume mesh's boundary, [`meshed_boundary`], where a neck lies by a self-crossing);
@@ -120,6 +122,38 @@ pub fn distance_field(distance: &SurfaceDistance, mesh: &TetMesh) -> Vec<f64> {
     }
     f
 }
+
+/// The Morse function on one side's volume mesh: [`distance_field`], the exact
+/// distance to the surface of `distance`. Where that surface crosses itself (its
+/// crossings recorded), its triangles are not all the boundary of the solid its
+/// winding number encloses: a part buried in another would put a valley of the field,
+/// down to 0, inside the solid, and 2-saddles round it (two unit balls 1.6 apart had
+/// two neck saddles, 1 apart a dozen by the buried caps, for the one at the crossing
+/// circle's centre). There a vertex whose distance to the mesh's own boundary on the
+/// surface ([`meshed_boundary`]: the solid's boundary as meshed) exceeds its distance to
+/// the surface by more than [`BURIED_DEPTH`] `× h` has its nearest surface point buried,
+/// and takes the distance to the boundary instead; elsewhere the exact one stays.
+pub fn volume_field(distance: &SurfaceDistance, volume: &VolumeResult) -> Vec<f64> {
+    let mut field = distance_field(distance, &volume.mesh);
+    if distance.crossings().is_none_or(<[_]>::is_empty) {
+        return field;
+    }
+    let boundary = distance_field(
+        &SurfaceDistance::new(&meshed_boundary(&volume.mesh, volume.side)),
+        &volume.mesh,
+    );
+    let depth = BURIED_DEPTH * volume.h;
+    for (value, to_boundary) in field.iter_mut().zip(boundary) {
+        if to_boundary > *value + depth {
+            *value = to_boundary;
+        }
+    }
+    field
+}
+
+/// See [`volume_field`]: a buried part nearer than this many `h` to the solid's
+/// boundary is not told from the boundary (the crossing curve's cells are `h / 8`).
+pub const BURIED_DEPTH: f64 = 0.125;
 
 /// Options of [`find_necks`]: which sides, and each stage's options.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -627,9 +661,10 @@ fn analyse_side(
     let name = side.name();
     let mut warnings = volume.warnings.clone();
 
-    // 3. The exact distance to the surface on its vertices.
+    // 3. The exact distance to the surface on its vertices (to the solid's boundary as
+    //    meshed, where the surface crosses itself).
     progress.start("distance", 0);
-    let field = distance_field(&prepared.distance, &volume.mesh);
+    let field = volume_field(&prepared.distance, &volume);
     progress.finish();
     let distance_seconds = clock.lap();
     if stopped() {

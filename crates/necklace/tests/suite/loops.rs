@@ -317,6 +317,38 @@ fn a_chain_of_three_balls_has_two_handle_loops() {
 }
 
 #[test]
+fn two_overlapping_balls_have_their_neck_loop_round_the_crossing_circle() {
+    // Two unit spheres 1.6 apart, given as two closed meshes that cross: the solid is
+    // their union, whose neck is the circle where they cross (x = 0, radius 0.6; a
+    // bulge of 1/0.6). The caps buried in the other ball are no boundary of it:
+    // measured to them, the distance had a valley inside the solid, and 2-saddles by
+    // it.
+    let balls = crate::common::union(&[
+        crate::common::sphere(1.0, [-0.8, 0.0, 0.0], 24.0),
+        crate::common::sphere(1.0, [0.8, 0.0, 0.0], 24.0),
+    ]);
+    let report = find_necks(
+        &balls,
+        &NeckOptions {
+            tunnels: false,
+            ..NeckOptions::default()
+        },
+    )
+    .unwrap();
+    // The distance to the union's boundary has one 2-saddle, at the circle's centre
+    // (with the caps, a second one lay at x = −0.14, and 14 by the caps 1 apart).
+    let saddles: Vec<[f64; 3]> = report.sides[0].saddles.iter().map(|s| s.position).collect();
+    assert_eq!(saddles.len(), 1, "{saddles:?}");
+    assert!(dist(saddles[0], [0.0; 3]) < 0.02, "{saddles:?}");
+    assert_eq!(report.loops.len(), 1, "{:?}", report.dropped);
+    let radius = 0.6;
+    for p in &report.loops[0].points {
+        let off = (p[1].hypot(p[2]) - radius).abs();
+        assert!(p[0].abs() < 0.05 && off < 0.05, "{p:?}");
+    }
+}
+
+#[test]
 fn a_varying_torus_has_a_handle_at_its_thin_side_and_a_tunnel_around_its_hole() {
     let shape = Shape::new(ShapeKind::VaryingTorus);
     let r = necks(&shape, true, true);
