@@ -45,10 +45,9 @@
 //! [`Lane`]; `sides_at_once: false` runs them one after the other): their volume meshes,
 //! then their analyses (steps 3–6), which run one after the other where the two meshes
 //! are large ([`NeckOptions::at_once_max_tets`]; with budget steps each side meshes and
-//! analyses in turns). Each side's stage
-//! timings are laps of its own clock, so they add up to the side's time; the run's
-//! `seconds` is its own wall clock (less than the input's time, [`NeckTimings::input`],
-//! plus both sides'). [`find_necks_with_progress`] reports progress; the crate re-exports
+//! analyses in turns). Each side's stage timings are laps of its own clock, so they add
+//! up to the side's time; the run's `seconds` is its own wall clock (less than the
+//! input's time, [`NeckTimings::input`], plus both sides'). [`find_necks_with_progress`] reports progress; the crate re-exports
 //! [`find_necks`] with [`NeckOptions`] as `necklace::Options`.
 //!
 //! Besides: [`inspect_surface`] (what `info` prints); [`prepare_surface`] (closed manifold
@@ -134,14 +133,27 @@ pub fn distance_field(distance: &SurfaceDistance, mesh: &TetMesh) -> Vec<f64> {
 /// the surface by more than [`BURIED_DEPTH`] `× h` has its nearest surface point buried,
 /// and takes the distance to the boundary instead; elsewhere the exact one stays.
 pub fn volume_field(distance: &SurfaceDistance, volume: &VolumeResult) -> Vec<f64> {
+    let boundary = crosses_itself(distance).then(|| meshed_boundary(&volume.mesh, volume.side));
+    field_of_solid(distance, volume, boundary.as_ref())
+}
+
+/// Whether the surface of `distance` has crossings recorded.
+fn crosses_itself(distance: &SurfaceDistance) -> bool {
+    distance.crossings().is_some_and(|c| !c.is_empty())
+}
+
+/// [`volume_field`] with the mesh's boundary on the surface made by the caller (`None`
+/// where the surface does not cross itself).
+fn field_of_solid(
+    distance: &SurfaceDistance,
+    volume: &VolumeResult,
+    boundary: Option<&SurfaceMesh>,
+) -> Vec<f64> {
     let mut field = distance_field(distance, &volume.mesh);
-    if distance.crossings().is_none_or(<[_]>::is_empty) {
+    let Some(boundary) = boundary else {
         return field;
-    }
-    let boundary = distance_field(
-        &SurfaceDistance::new(&meshed_boundary(&volume.mesh, volume.side)),
-        &volume.mesh,
-    );
+    };
+    let boundary = distance_field(&SurfaceDistance::new(boundary), &volume.mesh);
     let depth = BURIED_DEPTH * volume.h;
     for (value, to_boundary) in field.iter_mut().zip(boundary) {
         if to_boundary > *value + depth {
@@ -392,8 +404,8 @@ pub fn find_necks_with_progress(
 /// Both sides without budget steps: their volume meshes at the same time, then their
 /// analyses (steps 3–6), at the same time while the two meshes hold at most
 /// [`NeckOptions::at_once_max_tets`] tets, else the inside's then the outside's, with
-/// the peak memory of one analysis instead of both. The results are the same either way; each side's
-/// timings leave out its wait.
+/// the peak memory of one analysis instead of both. The results are the same either
+/// way; each side's timings leave out its wait.
 fn find_both_sides(
     prepared: &PreparedSurface,
     carry: Option<&Carry>,
@@ -664,7 +676,10 @@ fn analyse_side(
     // 3. The exact distance to the surface on its vertices (to the solid's boundary as
     //    meshed, where the surface crosses itself).
     progress.start("distance", 0);
-    let field = volume_field(&prepared.distance, &volume);
+    // The solid's boundary as meshed, made once for the field and the loops.
+    let solid_boundary =
+        crosses_itself(&prepared.distance).then(|| meshed_boundary(&volume.mesh, side));
+    let field = field_of_solid(&prepared.distance, &volume, solid_boundary.as_ref());
     progress.finish();
     let distance_seconds = clock.lap();
     if stopped() {
@@ -693,7 +708,8 @@ fn analyse_side(
     // surface of the solid that was meshed.
     let seeds = loop_seeds(&result);
     let near = seeds_near(prepared, &seeds);
-    let boundary = (near > 0).then(|| meshed_boundary(&volume.mesh, side));
+    let boundary =
+        (near > 0).then(|| solid_boundary.unwrap_or_else(|| meshed_boundary(&volume.mesh, side)));
     if let Some(boundary) = &boundary {
         warnings.push(format!(
             "{name}: {near} of {} necks lie where the surface crosses itself, so this side's loops are cut and tightened on the volume mesh's boundary ({} triangles, the surface of the solid meshed) instead of the input",
