@@ -15,10 +15,12 @@
 //! triangle away from them whose side winding numbers, read once at four points, agree;
 //! where it has holes, on each triangle far enough from them for a bound on the winding
 //! number's change). Where the pseudonormals do not decide, the winding number is the
-//! exact count of signed crossings along a segment out of the tree's box (`crossing`),
-//! less, on a surface with holes, the winding number of the cones that close them: it
-//! visits the leaves along one segment, where the fast winding number sums the solid
-//! angles of every triangle near the query, hundreds where parts overlap or cross.
+//! exact count of signed crossings along a segment from the nearest of a lattice of
+//! anchors whose counts were taken once (or, where that segment is degenerate, out of
+//! the tree's box; `crossing`), less, on a surface with holes, the winding number of
+//! the cones that close them: it visits the leaves along one short segment, where the
+//! fast winding number sums the solid angles of every triangle near the query,
+//! hundreds where parts overlap or cross.
 //! A dense input the pipeline simplifies is built [`SurfaceDistance::without_winding`] (no
 //! winding expansions, no pseudonormals: the stages that ask signs work on the copy;
 //! [`SurfaceDistance::add_winding`] adds the expansions); [`SurfaceDistance::recording`]
@@ -230,8 +232,13 @@ impl SurfaceDistance {
     pub fn use_pseudonormal_sign(&mut self, mesh: &SurfaceMesh) -> bool {
         let complete = self.bvh.faces.len() == mesh.triangles.len();
         let unbalanced = unbalanced_sides(&mesh.triangles);
-        self.closing = (complete && unbalanced.len() <= crossing::MAX_CLOSURE)
-            .then(|| std::sync::Arc::new(crossing::Closure::new(&mesh.positions, &unbalanced)));
+        self.closing = (complete && unbalanced.len() <= crossing::MAX_CLOSURE).then(|| {
+            std::sync::Arc::new(crossing::Closure::new(
+                &self.bvh,
+                &mesh.positions,
+                &unbalanced,
+            ))
+        });
         let pseudonormals = match (&self.crossings, &self.expansions) {
             (Some(crossings), Some(expansions)) => {
                 let winding = |p: [f64; 3]| self.winding_of_chain(expansions, p);
@@ -335,9 +342,9 @@ impl SurfaceDistance {
     /// Whether `p` is inside: winding number at least 0.5. Once
     /// [`use_pseudonormal_sign`](Self::use_pseudonormal_sign) has closed the chain
     /// (nothing to add, or cones over its holes), it is the exact count of signed
-    /// crossings along a segment out of the tree's box, less the cones' winding number
-    /// (`crossing`); else (and where every segment tried passes through a side or
-    /// a corner) the fast winding number.
+    /// crossings along a segment from the nearest anchor (or out of the tree's box),
+    /// less the cones' winding number (`crossing`); else (and where every segment
+    /// tried passes through a side or a corner) the fast winding number.
     pub fn is_inside(&self, p: [f64; 3]) -> bool {
         if let Some(w) = self.counted_winding(p) {
             return w >= 0.5;
