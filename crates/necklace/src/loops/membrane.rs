@@ -463,7 +463,10 @@ pub(super) fn shared_edge(topology: &Topology, f: u32, g: u32) -> Option<u32> {
 /// centroid distance; `None` when `b` is not reached within `max_settled` faces. A*
 /// with the straight distance to `b`'s centroid, which never overestimates (and is
 /// consistent: a step's length bounds the change of the distance), so the path is a
-/// shortest one and only faces towards `b` are searched.
+/// shortest one and only faces towards `b` are searched. The faces' labels live in a
+/// per-thread [`Search`], reused across calls: a membrane's joins are many and mostly
+/// short, but on a crossing model's meshed boundary one in a hundred settles 40–90 k
+/// faces (a hash map there was most of the join's time).
 pub(super) fn dual_path(
     surface: &SurfaceMesh,
     topology: &Topology,
@@ -474,42 +477,84 @@ pub(super) fn dual_path(
     if a == b {
         return Some(vec![a]);
     }
-    let target = centroid(surface, b);
-    let estimate = |c: [f64; 3]| norm(sub(target, c));
-    // Non-negative floats order like their bit patterns. Per face: (distance from `a`,
-    // previous face).
-    let mut best: HashMap<u32, (f64, u32)> = HashMap::new();
-    let mut heap = BinaryHeap::new();
-    best.insert(a, (0.0, a));
-    heap.push(Reverse((estimate(centroid(surface, a)).to_bits(), a)));
-    let mut settled = 0;
-    while let Some(Reverse((_, f))) = heap.pop() {
-        if f == b {
-            let mut path = vec![b];
-            let mut x = b;
-            while x != a {
-                x = best[&x].1;
-                path.push(x);
+    SEARCH.with_borrow_mut(|search| {
+        search.start(surface.triangles.len());
+        let target = centroid(surface, b);
+        let estimate = |c: [f64; 3]| norm(sub(target, c));
+        // Non-negative floats order like their bit patterns.
+        let mut heap = BinaryHeap::new();
+        search.set(a, 0.0, a);
+        heap.push(Reverse((estimate(centroid(surface, a)).to_bits(), a)));
+        let mut settled = 0;
+        while let Some(Reverse((_, f))) = heap.pop() {
+            if f == b {
+                let mut path = vec![b];
+                let mut x = b;
+                while x != a {
+                    x = search.get(x)?.1;
+                    path.push(x);
+                }
+                path.reverse();
+                return Some(path);
             }
-            path.reverse();
-            return Some(path);
-        }
-        settled += 1;
-        if settled > max_settled {
-            return None;
-        }
-        let df = best[&f].0;
-        let cf = centroid(surface, f);
-        for g in neighbours(topology, f) {
-            let cg = centroid(surface, g);
-            let dg = df + norm(sub(cg, cf));
-            if best.get(&g).is_none_or(|(old, _)| dg < *old) {
-                best.insert(g, (dg, f));
-                heap.push(Reverse(((dg + estimate(cg)).to_bits(), g)));
+            settled += 1;
+            if settled > max_settled {
+                return None;
             }
+            let df = search.get(f)?.0;
+            let cf = centroid(surface, f);
+            for g in neighbours(topology, f) {
+                let cg = centroid(surface, g);
+                let dg = df + norm(sub(cg, cf));
+                if search.get(g).is_none_or(|(old, _)| dg < old) {
+                    search.set(g, dg, f);
+                    heap.push(Reverse(((dg + estimate(cg)).to_bits(), g)));
+                }
+            }
+        }
+        None
+    })
+}
+
+thread_local! {
+    /// [`dual_path`]'s labels, one per thread.
+    static SEARCH: std::cell::RefCell<Search> = std::cell::RefCell::default();
+}
+
+/// Per face: the distance from the search's start and the previous face, valid where
+/// the face's stamp is the current search's (no clearing between searches).
+#[derive(Debug, Default)]
+struct Search {
+    stamp: Vec<u32>,
+    label: Vec<(f64, u32)>,
+    current: u32,
+}
+
+impl Search {
+    /// A new search over `faces` faces: no face labelled.
+    fn start(&mut self, faces: usize) {
+        if self.stamp.len() < faces {
+            self.stamp.resize(faces, 0);
+            self.label.resize(faces, (0.0, 0));
+        }
+        self.current = self.current.wrapping_add(1);
+        if self.current == 0 {
+            // After 2³² searches: forget every stamp.
+            self.stamp.fill(0);
+            self.current = 1;
         }
     }
-    None
+
+    fn get(&self, f: u32) -> Option<(f64, u32)> {
+        (self.stamp.get(f as usize) == Some(&self.current)).then(|| self.label[f as usize])
+    }
+
+    fn set(&mut self, f: u32, distance: f64, previous: u32) {
+        if let Some(stamp) = self.stamp.get_mut(f as usize) {
+            *stamp = self.current;
+            self.label[f as usize] = (distance, previous);
+        }
+    }
 }
 
 /// The cyclic face sequence without steps that go straight back (… f g f … → … f …)
