@@ -34,7 +34,7 @@
 //! terms give it. Beyond [`MAX_CLOSURE`] such edges the caller keeps the fast winding
 //! number.
 //!
-//! Most queries need no segment out of the box. [`Closure::new`] counts, once, the
+//! Most queries need no segment out of the box. The first query counts, once, the
 //! chain's winding number at the corners of a lattice of *anchors* over the box
 //! (at most [`MAX_ANCHOR_CELLS`] cells along its longest side, offset from the
 //! box by fixed fractions so that no CAD plane holds them). The winding number at
@@ -57,28 +57,22 @@ use crate::geom::add;
 pub(super) const MAX_CLOSURE: usize = 1 << 16;
 
 /// The cones that close a chain, on a tree with the fast winding number's expansions
-/// (no triangles for a chain that closes), and the chain's counts at the anchors.
+/// (no triangles for a chain that closes), and the chain's counts at the anchors,
+/// taken at the first query (most surfaces take every sign from their pseudonormals and
+/// never ask).
 #[derive(Debug, Clone, Default)]
 pub(super) struct Closure {
     bvh: Bvh,
     expansions: Vec<Expansion>,
-    anchors: Anchors,
+    anchors: std::sync::OnceLock<Anchors>,
 }
 
 impl Closure {
-    /// The cones over the directed sides `missing` that the chain of the triangles in
-    /// `surface` lacks ([`unbalanced_sides`](super::unbalanced_sides)): per connected
-    /// group of sides, one triangle `(apex, a, b)` per side `a → b`, the apex the mean
-    /// of the group's vertices (no triangles for no sides); then the closed chain's
-    /// counts at the anchors over `surface`'s box ([`Anchors::new`]).
-    pub(super) fn new(surface: &Bvh, positions: &[[f64; 3]], missing: &[[u32; 2]]) -> Closure {
-        let mut closure = Closure::cones(positions, missing);
-        closure.anchors = Anchors::new(surface, &closure.bvh);
-        closure
-    }
-
-    /// The cones alone (no anchors).
-    fn cones(positions: &[[f64; 3]], missing: &[[u32; 2]]) -> Closure {
+    /// The cones over the directed sides `missing` that a chain lacks
+    /// ([`unbalanced_sides`](super::unbalanced_sides)): per connected group of sides,
+    /// one triangle `(apex, a, b)` per side `a → b`, the apex the mean of the group's
+    /// vertices. No triangles for no sides.
+    pub(super) fn new(positions: &[[f64; 3]], missing: &[[u32; 2]]) -> Closure {
         if missing.is_empty() {
             return Closure::default();
         }
@@ -121,7 +115,7 @@ impl Closure {
         Closure {
             bvh,
             expansions,
-            anchors: Anchors::default(),
+            anchors: std::sync::OnceLock::new(),
         }
     }
 
@@ -160,10 +154,11 @@ struct Anchors {
 impl Anchors {
     /// The lattice over the box of `surface`, one more anchor than cells along each
     /// side (cubic cells, [`MAX_ANCHOR_CELLS`] or fewer along the longest side), and
-    /// the count of `surface` and `cones` at each, by segments out of the box; in
-    /// parallel (each anchor on its own: the same counts on any number of threads).
+    /// the count of `surface` and `cones` at each, by segments out of the box. On the
+    /// calling thread: it runs inside a query, which may be one of a parallel loop's,
+    /// and a thread that stole another query while this waited on its workers would
+    /// wait for itself (a few tenths of a second at 64³ anchors).
     fn new(surface: &Bvh, cones: &Bvh) -> Anchors {
-        use rayon::prelude::*;
         let Some(root) = surface.nodes.first() else {
             return Anchors::default();
         };
@@ -185,7 +180,6 @@ impl Anchors {
             counts: Vec::new(),
         };
         anchors.counts = (0..n[0] * n[1] * n[2])
-            .into_par_iter()
             .map(|i| chain_count(surface, cones, anchors.position(i)))
             .collect();
         anchors
@@ -229,7 +223,10 @@ pub(super) fn winding_by_crossings(bvh: &Bvh, closure: &Closure, p: [f64; 3]) ->
     if !p.iter().all(|c| c.is_finite()) {
         return None;
     }
-    let from_anchor = closure.anchors.nearest(p).and_then(|(a, count)| {
+    let anchors = closure
+        .anchors
+        .get_or_init(|| Anchors::new(bvh, &closure.bvh));
+    let from_anchor = anchors.nearest(p).and_then(|(a, count)| {
         // w(p) = w(a) + the count along p → a (+1 for each triangle p lies behind).
         Some(count + count_along(bvh, p, a)? + count_along(&closure.bvh, p, a)?)
     });
@@ -405,7 +402,7 @@ mod tests {
         tris.extend(cube([1.0; 3], [3.0; 3], false));
         tris.extend(cube([4.0, 0.0, 0.0], [5.0, 1.0, 1.0], true));
         let bvh = tree(tris);
-        let anchored = Closure::new(&bvh, &[], &[]);
+        let anchored = Closure::default();
         assert!(anchored.is_empty());
         let inside = |p: [f64; 3], lo: f64, hi: f64| (0..3).all(|k| p[k] > lo && p[k] < hi);
         let mut from_anchors = 0;
@@ -413,21 +410,21 @@ mod tests {
             let expected = i32::from(inside(p, 0.0, 2.0)) + i32::from(inside(p, 1.0, 3.0))
                 - i32::from(p[0] > 4.0 && p[0] < 5.0 && (1..3).all(|k| p[k] > 0.0 && p[k] < 1.0));
             // Out of the box, and from the nearest anchor.
-            for closure in [&Closure::default(), &anchored] {
-                assert_eq!(
-                    winding_by_crossings(&bvh, closure, p),
-                    Some(f64::from(expected)),
-                    "at {p:?}"
-                );
-            }
+            assert_eq!(chain_count(&bvh, &Bvh::default(), p), Some(expected));
+            assert_eq!(
+                winding_by_crossings(&bvh, &anchored, p),
+                Some(f64::from(expected)),
+                "at {p:?}"
+            );
             // Within the tree's box (0..5, 0..3, 0..3) every point has an anchor.
             let in_box = p[0] > 0.0 && p[0] < 5.0 && (1..3).all(|k| p[k] > 0.0 && p[k] < 3.0);
-            let anchor = anchored.anchors.nearest(p);
+            let anchor = anchored.anchors.get().expect("counted").nearest(p);
             assert!(anchor.is_some() || !in_box, "no anchor at {p:?}");
             from_anchors += usize::from(anchor.is_some());
         }
         // Every anchor's count was taken.
-        assert!(anchored.anchors.counts.iter().all(Option::is_some));
+        let counts = &anchored.anchors.get().expect("counted").counts;
+        assert!(counts.iter().all(Option::is_some));
         assert!(from_anchors > 1000, "{from_anchors} points from anchors");
     }
 
@@ -438,8 +435,7 @@ mod tests {
         let mut tris = cube([0.0; 3], [4.0; 3], false);
         tris.extend(cube([1.0; 3], [3.0; 3], true));
         let bvh = tree(tris);
-        let closure = Closure::new(&bvh, &[], &[]);
-        let anchors = &closure.anchors;
+        let anchors = Anchors::new(&bvh, &Bvh::default());
         assert_eq!(anchors.counts.len(), anchors.n.iter().product::<usize>());
         for (i, count) in anchors.counts.iter().enumerate() {
             let a = anchors.position(i);
@@ -537,7 +533,7 @@ mod tests {
             .map(|t| t.map(|v| positions[v as usize]))
             .collect();
         let bvh = tree(tris);
-        let closure = Closure::new(&bvh, &positions, &missing);
+        let closure = Closure::new(&positions, &missing);
         assert_eq!(closure.bvh.tris.len(), 7);
         for p in scatter(500, -0.5, 3.0) {
             let exact = super::super::winding::exact(&bvh, p);

@@ -232,13 +232,8 @@ impl SurfaceDistance {
     pub fn use_pseudonormal_sign(&mut self, mesh: &SurfaceMesh) -> bool {
         let complete = self.bvh.faces.len() == mesh.triangles.len();
         let unbalanced = unbalanced_sides(&mesh.triangles);
-        self.closing = (complete && unbalanced.len() <= crossing::MAX_CLOSURE).then(|| {
-            std::sync::Arc::new(crossing::Closure::new(
-                &self.bvh,
-                &mesh.positions,
-                &unbalanced,
-            ))
-        });
+        self.closing = (complete && unbalanced.len() <= crossing::MAX_CLOSURE)
+            .then(|| std::sync::Arc::new(crossing::Closure::new(&mesh.positions, &unbalanced)));
         let pseudonormals = match (&self.crossings, &self.expansions) {
             (Some(crossings), Some(expansions)) => {
                 let winding = |p: [f64; 3]| self.winding_of_chain(expansions, p);
