@@ -38,11 +38,11 @@
 //! chain's winding number at the corners of a lattice of *anchors* over the box
 //! (at most [`MAX_ANCHOR_CELLS`] cells along its longest side, offset from the
 //! box by fixed fractions so that no CAD plane holds them). The winding number at
-//! `p` is then the anchor's nearest to it plus the signed count along the short
-//! segment between them: counts are integers, so any path gives the same answer, and
-//! the short segment meets a few triangles where the segment out of the box meets
-//! dozens (on a model whose parts cross, 8.5 M queries of 44 triangles each; figures
-//! in `docs/decisions.md`). Where that segment is degenerate, or the anchor's own
+//! `p` is then the count at the anchor nearest to it plus the signed count along the
+//! short segment between them: counts are integers, so any path gives the same
+//! answer, and the short segment meets a few triangles where the segment out of the
+//! box meets dozens (on a model whose parts cross, 8.5 M queries of 44 triangles each;
+//! figures in `docs/decisions.md`). Where that segment is degenerate, or the anchor's own
 //! count was, the segment out of the box is taken.
 //!
 //! Entry points: [`Closure::new`], then [`winding_by_crossings`].
@@ -213,7 +213,8 @@ impl Anchors {
     }
 }
 
-/// The winding number at `p` of the triangles in `bvh`, closed by `closure`: the
+/// The winding number at `p` of the triangles in `bvh`, closed by `closure` (built for
+/// those triangles: its anchors are counted on `bvh` at the first call): the
 /// chain's count at the nearest anchor plus the signed count along the segment from
 /// it, or else by a segment out of the tree's box; less the closure's fast winding
 /// number. `None` where every segment tried is degenerate (through a side or a

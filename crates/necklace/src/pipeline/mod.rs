@@ -47,8 +47,9 @@
 //! are large ([`NeckOptions::at_once_max_tets`]; with budget steps each side meshes and
 //! analyses in turns). Each side's stage timings are laps of its own clock, so they add
 //! up to the side's time; the run's `seconds` is its own wall clock (less than the
-//! input's time, [`NeckTimings::input`], plus both sides'). [`find_necks_with_progress`] reports progress; the crate re-exports
-//! [`find_necks`] with [`NeckOptions`] as `necklace::Options`.
+//! input's time, [`NeckTimings::input`], plus both sides').
+//! [`find_necks_with_progress`] reports progress; the crate re-exports [`find_necks`]
+//! with [`NeckOptions`] as `necklace::Options`.
 //!
 //! Besides: [`inspect_surface`] (what `info` prints); [`prepare_surface`] (closed manifold
 //! surfaces only) and [`load_surface`]; [`distance_field`]. [`find_critical_points`] and
