@@ -289,11 +289,14 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
     // estimate calibrated on an octree; a tree or a mesh still over the budget
     // coarsens the floor (to the finest level of that tree that fits, when it names
     // one) and starts again.
+    // The cells' centre values the trees have evaluated, for the next tree: the same
+    // cell (the root is the same whatever the floor) has the same value.
+    let mut values = CentreValues::default();
     let Calibration {
         mut floor,
         fits,
         over,
-    } = calibrated_floor(domain, options, &features, lo, hi)?;
+    } = calibrated_floor(domain, options, &features, lo, hi, &mut values)?;
     // The calibration's tree at that floor over the budget is the first attempt's
     // failure: it would build the same tree again.
     let mut known_failure = over;
@@ -303,7 +306,7 @@ pub fn stuff_volume(domain: &dyn Domain, options: &StuffingOptions) -> Result<Vo
         attempts += 1;
         let attempt = match known_failure.take() {
             Some(failed) => Err(failed),
-            None => stuff_lattice(domain, options, &clamped, lo, hi),
+            None => stuff_lattice(domain, options, &clamped, lo, hi, &mut values),
         };
         match attempt {
             Ok(lattice) => break (lattice, clamped),
@@ -503,6 +506,7 @@ fn calibrated_floor(
     features: &[SizingFeature],
     lo: [f64; 3],
     hi: [f64; 3],
+    values: &mut CentreValues,
 ) -> Result<Calibration> {
     let Some(floor) = spacing_floor(features, options) else {
         return Ok(Calibration {
@@ -513,7 +517,7 @@ fn calibrated_floor(
     };
     let clamped = clamp_spacing(features, Some(floor));
     let grid = Grid::new(lo, hi, options.h, &clamped)?;
-    let tree = match build_octree(domain, &grid, &clamped, options) {
+    let tree = match build_octree(domain, &grid, &clamped, options, values) {
         Ok(tree) => tree,
         Err(failed @ Failed::OverBudget { .. }) => {
             return Ok(Calibration {
@@ -557,6 +561,7 @@ fn stuff_lattice(
     features: &[SizingFeature],
     lo: [f64; 3],
     hi: [f64; 3],
+    values: &mut CentreValues,
 ) -> std::result::Result<Lattice, Failed> {
     let mut clock = Instant::now();
     let mut seconds = [0.0; 7];
@@ -565,7 +570,10 @@ fn stuff_lattice(
         clock = Instant::now();
     };
     let grid = Grid::new(lo, hi, options.h, features)?;
-    let tree = build_octree(domain, &grid, features, options)?;
+    let tree = build_octree(domain, &grid, features, options, values)?;
+    // A tree that fitted is the last one built, unless its stuffing is over the
+    // budget (rare): the values go.
+    *values = CentreValues::default();
     lap(0);
 
     let background = background::tetrahedralize(&tree.octree, &|c| tree.dead.contains(c));
@@ -809,6 +817,13 @@ fn over_budget(
     }
 }
 
+/// A level whose count scaled from its first parts passes the leaves allowed by this
+/// factor is over the budget without the rest (the parts are samples; the count is a
+/// lower bound on the tree's): ps_mk3s_gantry's inside within 2 GB spent 4.0 of its
+/// failed tree's 6.2 s on the part of a level it evaluated, 2.2 times over, before the
+/// leaves counted passed the leaves allowed.
+const SAMPLED_EXCESS: f64 = 1.25;
+
 /// The leaves an octree under construction has so far, against the budget, and what
 /// the tree would give stopped at each level ([`Truncation`]).
 ///
@@ -876,10 +891,14 @@ impl LeafCount {
 
     /// After a part of the level (`share` of its cells so far): whether the tree is
     /// over the budget (then it is given up, and the level stopped here is the last
-    /// truncation, its counts scaled to the whole level).
+    /// truncation, its counts scaled to the whole level). Over when the leaves counted
+    /// pass the leaves allowed, or when the level's count scaled from its part passes
+    /// them by [`SAMPLED_EXCESS`] (the parts are samples of the level).
     fn over(&mut self, share: f64) -> bool {
         let finished = self.finished[0] + self.finished[1];
-        let over = finished + self.leaves + self.split > self.max_leaves;
+        let scaled = finished as f64 + (self.leaves + self.split) as f64 / share;
+        let over = finished + self.leaves + self.split > self.max_leaves
+            || scaled > SAMPLED_EXCESS * self.max_leaves as f64;
         if over || share >= 1.0 {
             let [inside, crossed] = self.level.map(|n| n as f64 / share);
             self.truncations.push(Truncation {
@@ -909,6 +928,7 @@ fn build_octree(
     grid: &Grid,
     features: &[SizingFeature],
     options: &StuffingOptions,
+    known: &mut CentreValues,
 ) -> std::result::Result<Tree, Failed> {
     let h = grid.h;
     let coarsest = domain.coarsest_spacing(h).max(h);
@@ -925,29 +945,45 @@ fn build_octree(
         let size = grid.length(cells.first().map_or(0, |c| c.size));
         let half_diagonal = 0.5 * 3f64.sqrt() * size;
         let thin = lists.level(cells, &to_point, grid.unit);
-        // In eighths: past the leaves allowed, the rest of the level is not evaluated
-        // (a level costs a distance per cell; figures in `docs/decisions.md`, Volume
-        // mesh), the next level not built, nor the tree balanced.
-        let part = cells.len().div_ceil(8).max(1 << 14);
+        // In up to eight interleaved parts (`level_parts`), each a sample of the whole
+        // level: past the leaves allowed, or once the part evaluated, scaled to the
+        // level, is well past them ([`LeafCount::over`]), the rest of the level is not
+        // evaluated (a level costs a distance per cell; figures in
+        // `docs/decisions.md`, Volume mesh), the next level not built, nor the tree
+        // balanced.
         count.start_level(size);
-        let mut decisions = Vec::with_capacity(cells.len());
-        for (cells_part, thin) in cells.chunks(part).zip(thin.chunks(part)) {
-            let centres: Vec<[f64; 3]> =
-                cells_part.iter().map(|c| grid.point(c.center())).collect();
+        let mut decisions = vec![false; cells.len()];
+        let mut evaluated = 0;
+        for part in level_parts(cells.len()) {
+            // The values an earlier tree evaluated, and the others.
+            let mut values: Vec<f64> = part
+                .iter()
+                .map(|&i| known.get(grid.point(cells[i].center())).unwrap_or(f64::NAN))
+                .collect();
+            let unknown: Vec<usize> = (0..part.len()).filter(|&j| values[j].is_nan()).collect();
+            let centres: Vec<[f64; 3]> = unknown
+                .iter()
+                .map(|&j| grid.point(cells[part[j]].center()))
+                .collect();
             // A cell's centre is half its diagonal from its parent's: where the
             // parent's value is larger (f is 1-Lipschitz; a value beyond the band is a
             // bound), no boundary lies between them and the sign is the parent's.
-            let signs: Vec<i8> = cells_part
+            let signs: Vec<i8> = unknown
                 .iter()
-                .map(|cell| {
-                    octree::parent(grid.root, *cell)
+                .map(|&j| {
+                    octree::parent(grid.root, cells[part[j]])
                         .and_then(|parent| centre_values.get(&parent.center()))
                         .filter(|f| f.abs() > half_diagonal * (1.0 + 1e-9))
                         .map_or(0, |f| if *f < 0.0 { -1 } else { 1 })
                 })
                 .collect();
-            let values = domain.values_within_signed(&centres, half_diagonal + coarsest, &signs);
-            for ((cell, f), &thin_spacing) in cells_part.iter().zip(values).zip(thin) {
+            let found = domain.values_within_signed(&centres, half_diagonal + coarsest, &signs);
+            for ((&j, f), p) in unknown.iter().zip(found).zip(centres) {
+                values[j] = f;
+                known.insert(p, f);
+            }
+            for (&i, f) in part.iter().zip(values) {
+                let cell = &cells[i];
                 centre_values.insert(cell.center(), f);
                 let is_dead = f > half_diagonal * (1.0 + 1e-9);
                 if is_dead {
@@ -959,15 +995,16 @@ fn build_octree(
                 // keeps a band of fine cells 3–4 h thick on each side: 15–30 % more
                 // unknowns and the same loops, angles and topology on the shared
                 // models.
-                let split = thin_spacing * std::f64::consts::SQRT_2 < size
+                let split = thin[i] * std::f64::consts::SQRT_2 < size
                     || (f.abs() < half_diagonal
                         && size
                             > domain.spacing_near(grid.point(cell.center()), h).max(h)
                                 * (1.0 + 1e-9));
                 count.add(split, (!is_dead).then_some(f >= -half_diagonal));
-                decisions.push(split);
+                decisions[i] = split;
             }
-            if count.over(decisions.len() as f64 / cells.len() as f64) {
+            evaluated += part.len();
+            if count.over(evaluated as f64 / cells.len() as f64) {
                 return None;
             }
         }
@@ -1023,6 +1060,44 @@ fn build_octree(
         truncations: count.truncations,
     })
 }
+
+/// Cell centre values by position (bit for bit), kept from one octree to the next
+/// within a floor search. A point is the centre of at most one cell size of the root
+/// (the grids of different floors share the root and its origin, and scale their
+/// units by powers of two, so positions agree to the bit), and a cell's value depends
+/// only on the cell (the distance within its band, the sign from its parent's): a
+/// later tree takes it instead of evaluating it again. On a budget-bound model the
+/// tree that fits is the failed tree's upper levels.
+#[derive(Default)]
+struct CentreValues(HashMap<[u64; 3], f64>);
+
+impl CentreValues {
+    fn get(&self, p: [f64; 3]) -> Option<f64> {
+        self.0.get(&p.map(f64::to_bits)).copied()
+    }
+
+    fn insert(&mut self, p: [f64; 3], f: f64) {
+        self.0.insert(p.map(f64::to_bits), f);
+    }
+}
+
+/// The parts a level of `n` cells is evaluated in: up to eight, of at least
+/// [`MIN_PART`] cells each, interleaved so that each is a sample of the whole level. A
+/// level lists the eight children of each split cell together, parents in the order of
+/// the level above: cell `i` goes to part `(i + i / 8) mod parts`, one child of each
+/// parent in every part (of eight), the child turning from parent to parent.
+fn level_parts(n: usize) -> Vec<Vec<usize>> {
+    let parts = (n / MIN_PART).clamp(1, 8);
+    let mut out = vec![Vec::with_capacity(n / parts + 1); parts];
+    for i in 0..n {
+        out[(i + i / 8) % parts].push(i);
+    }
+    out
+}
+
+/// The fewest cells a part of a level ([`level_parts`]) holds, but for a level smaller
+/// than it: a sample this large scales to the level within a few per cent.
+const MIN_PART: usize = 1 << 14;
 
 /// The domain's value at each lattice vertex. The centre of a cell evaluated while
 /// building the tree (a leaf's centre, or a corner its parent's centre became) has its
@@ -1135,7 +1210,13 @@ mod tests {
         let features = clamp_spacing(&slab.sizing(), floor);
         let (lo, hi) = slab.bounds();
         let grid = Grid::new(lo, hi, options.h, &features).unwrap();
-        build_octree(slab, &grid, &features, options)
+        build_octree(
+            slab,
+            &grid,
+            &features,
+            options,
+            &mut CentreValues::default(),
+        )
     }
 
     #[test]
@@ -1193,6 +1274,147 @@ mod tests {
             "finest cell {finest}, level that fits {}",
             fitting.size
         );
+    }
+
+    /// A domain that counts the points it is asked for.
+    struct Counted<'a> {
+        inner: &'a dyn Domain,
+        points: std::sync::atomic::AtomicUsize,
+    }
+
+    impl Domain for Counted<'_> {
+        fn value(&self, p: [f64; 3]) -> f64 {
+            self.points
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            self.inner.value(p)
+        }
+        fn boundary_kind(&self, p: [f64; 3]) -> crate::tet::VertexKind {
+            self.inner.boundary_kind(p)
+        }
+        fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+            self.inner.bounds()
+        }
+        fn sizing(&self) -> Vec<SizingFeature> {
+            self.inner.sizing()
+        }
+    }
+
+    #[test]
+    fn a_tree_built_after_another_takes_its_values_and_is_the_same_tree() {
+        let slab = Slab { spacing: 1e-3 };
+        let options = StuffingOptions::new(0.25);
+        let counted = Counted {
+            inner: &slab,
+            points: 0.into(),
+        };
+        let build = |floor: f64, known: &mut CentreValues| {
+            let features = clamp_spacing(&slab.sizing(), Some(floor));
+            let (lo, hi) = slab.bounds();
+            let grid = Grid::new(lo, hi, options.h, &features).unwrap();
+            let Ok(tree) = build_octree(&counted, &grid, &features, &options, known) else {
+                panic!("a tree over a budget of {} tets", options.max_tets());
+            };
+            let mut values: Vec<([u64; 3], u64)> = tree
+                .centre_values
+                .iter()
+                .map(|(&k, &f)| (grid.point(k).map(f64::to_bits), f.to_bits()))
+                .collect();
+            values.sort_unstable();
+            let mut dead: Vec<[u64; 3]> = tree
+                .dead
+                .iter()
+                .map(|c| grid.point(c.center()).map(f64::to_bits))
+                .collect();
+            dead.sort_unstable();
+            let leaves: Vec<([u64; 3], u64)> = tree
+                .octree
+                .leaves()
+                .iter()
+                .map(|c| {
+                    (
+                        grid.point(c.center()).map(f64::to_bits),
+                        grid.length(c.size).to_bits(),
+                    )
+                })
+                .collect();
+            (leaves, dead, values, tree.estimated_tets)
+        };
+        let points = || counted.points.load(std::sync::atomic::Ordering::Relaxed);
+        // Alone, the finer tree evaluates every cell centre it has.
+        let alone = build(0.03, &mut CentreValues::default());
+        let alone_points = points();
+        assert_eq!(alone_points, alone.2.len());
+        // After a coarser tree, with its values: the same leaves, dead cells, values
+        // (to the bit) and estimate, and only the centres the coarser tree lacked.
+        let mut known = CentreValues::default();
+        let coarse = build(0.1, &mut known);
+        let before = points();
+        let after = build(0.03, &mut known);
+        assert!(after == alone, "the tree changed with the values kept");
+        let shared = coarse
+            .2
+            .iter()
+            .filter(|v| alone.2.binary_search(v).is_ok())
+            .count();
+        assert!(shared > 0 && shared < alone.2.len());
+        assert_eq!(points() - before, alone_points - shared);
+    }
+
+    #[test]
+    fn a_level_goes_in_interleaved_parts_that_cover_it_once() {
+        for n in [
+            0,
+            1,
+            7,
+            MIN_PART - 1,
+            3 * MIN_PART + 5,
+            8 * MIN_PART,
+            20 * MIN_PART + 3,
+        ] {
+            let parts = level_parts(n);
+            assert_eq!(parts.len(), (n / MIN_PART).clamp(1, 8));
+            let mut all: Vec<usize> = parts.concat();
+            all.sort_unstable();
+            assert_eq!(all, (0..n).collect::<Vec<_>>(), "{n} cells");
+            if parts.len() == 8 {
+                // One child of each parent (eight cells in a row) in every part, the
+                // child turning from parent to parent.
+                for (j, part) in parts.iter().enumerate() {
+                    for (p, &i) in part.iter().take(n / 8).enumerate() {
+                        assert_eq!(i / 8, p);
+                        assert_eq!(i % 8, (j + 8 - p % 8) % 8);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_level_whose_part_scales_well_over_the_budget_gives_the_tree_up() {
+        // 800 leaves allowed: a part of an eighth with 60 leaves and 60 splits scales
+        // to 960 (1.2 times), with 70 and 60 to 1 040 (1.3 times).
+        let max_tets = (799.5 * 0.5 * TETS_PER_LEAF) as usize;
+        for (leaves, over) in [(60, false), (70, true)] {
+            let mut count = LeafCount::new(max_tets);
+            assert_eq!(count.max_leaves, 800);
+            count.start_level(1.0);
+            for k in 0..leaves + 60 {
+                count.add(k < 60, Some(k % 2 == 0));
+            }
+            assert_eq!(count.over(0.125), over, "{leaves} leaves in the part");
+            if over {
+                assert_eq!(count.too_big, Some(1040));
+                let last = count.truncations.last().expect("the level stopped here");
+                assert_eq!(last.size, 1.0);
+            }
+        }
+        // Counted leaves past the leaves allowed give it up whatever the share.
+        let mut count = LeafCount::new(max_tets);
+        count.start_level(1.0);
+        for _ in 0..801 {
+            count.add(false, Some(true));
+        }
+        assert!(count.over(1.0));
     }
 
     #[test]
