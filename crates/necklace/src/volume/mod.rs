@@ -529,12 +529,15 @@ fn calibrated_floor(
         Err(Failed::Other(e)) => return Err(e),
     };
     let estimate = sizing::feature_estimate(features, floor);
+    let estimated_tets = tree.estimated_tets;
+    // The first attempt's tree (a floor as fine or finer) takes this one's values.
+    values.take(&grid, tree.centre_values);
     // A tenth more than the tree counted: the ratio grows as the floor falls (the
     // features' regions overlap less). More margin would save the attempts that fall
     // back, but land a power of two coarser than the budget allows (measured on the
     // wire sphere inside at 4 GB: twice the ratio gave 0.41 M tets and 88 of its 95
     // handles, this 2.57 M and all 95).
-    let ratio = (1.1 * tree.estimated_tets as f64 / estimate).clamp(1.0 / 16.0, 1.0);
+    let ratio = (1.1 * estimated_tets as f64 / estimate).clamp(1.0 / 16.0, 1.0);
     let calibrated = sizing::spacing_floor_scaled(features, options, ratio).map(|f| f.min(floor));
     Ok(Calibration {
         floor: calibrated,
@@ -572,7 +575,7 @@ fn stuff_lattice(
     let grid = Grid::new(lo, hi, options.h, features)?;
     let tree = build_octree(domain, &grid, features, options, values)?;
     // A tree that fitted is the last one built, unless its stuffing is over the
-    // budget (rare): the values go.
+    // budget (rare): the earlier trees' values go.
     *values = CentreValues::default();
     lap(0);
 
@@ -978,9 +981,8 @@ fn build_octree(
                 })
                 .collect();
             let found = domain.values_within_signed(&centres, half_diagonal + coarsest, &signs);
-            for ((&j, f), p) in unknown.iter().zip(found).zip(centres) {
+            for (&j, f) in unknown.iter().zip(found) {
                 values[j] = f;
-                known.insert(p, f);
             }
             for (&i, f) in part.iter().zip(values) {
                 let cell = &cells[i];
@@ -1012,6 +1014,8 @@ fn build_octree(
         Some(decisions)
     });
     let (Some(octree), None) = (octree, count.too_big) else {
+        // The next tree of the search (a coarser floor) takes the values.
+        known.take(grid, centre_values);
         let finest = count.truncations.last().map_or(h, |t| t.size);
         let estimate = 0.5 * TETS_PER_LEAF * count.too_big.unwrap_or(0) as f64;
         return Err(over_budget(
@@ -1040,6 +1044,7 @@ fn build_octree(
             .unwrap_or(grid.root.size),
     );
     if estimated_tets > options.max_tets() {
+        known.take(grid, centre_values);
         // The balance added cells round the finest ones: the levels are taken to grow
         // in the same proportion, so that a floor at a level still over is not tried
         // (`docs/decisions.md`, Volume mesh).
@@ -1067,7 +1072,8 @@ fn build_octree(
 /// units by powers of two, so positions agree to the bit), and a cell's value depends
 /// only on the cell (the distance within its band, the sign from its parent's): a
 /// later tree takes it instead of evaluating it again. On a budget-bound model the
-/// tree that fits is the failed tree's upper levels.
+/// tree that fits is the failed tree's upper levels. A tree that is not kept (over the
+/// budget, or the calibration's) hands its values over ([`CentreValues::take`]).
 #[derive(Default)]
 struct CentreValues(HashMap<[u64; 3], f64>);
 
@@ -1076,8 +1082,12 @@ impl CentreValues {
         self.0.get(&p.map(f64::to_bits)).copied()
     }
 
-    fn insert(&mut self, p: [f64; 3], f: f64) {
-        self.0.insert(p.map(f64::to_bits), f);
+    /// Keeps the values of a tree on `grid` (by key) for the next tree.
+    fn take(&mut self, grid: &Grid, values: HashMap<Key, f64>) {
+        self.0.reserve(values.len());
+        for (k, f) in values {
+            self.0.insert(grid.point(k).map(f64::to_bits), f);
+        }
     }
 }
 
@@ -1337,19 +1347,22 @@ mod tests {
                     )
                 })
                 .collect();
-            (leaves, dead, values, tree.estimated_tets)
+            let estimated = tree.estimated_tets;
+            // Handed over as the search hands over a tree it does not keep.
+            let mut handed = CentreValues::default();
+            handed.take(&grid, tree.centre_values);
+            ((leaves, dead, values, estimated), handed)
         };
         let points = || counted.points.load(std::sync::atomic::Ordering::Relaxed);
         // Alone, the finer tree evaluates every cell centre it has.
-        let alone = build(0.03, &mut CentreValues::default());
+        let (alone, _) = build(0.03, &mut CentreValues::default());
         let alone_points = points();
         assert_eq!(alone_points, alone.2.len());
         // After a coarser tree, with its values: the same leaves, dead cells, values
         // (to the bit) and estimate, and only the centres the coarser tree lacked.
-        let mut known = CentreValues::default();
-        let coarse = build(0.1, &mut known);
+        let (coarse, mut known) = build(0.1, &mut CentreValues::default());
         let before = points();
-        let after = build(0.03, &mut known);
+        let (after, _) = build(0.03, &mut known);
         assert!(after == alone, "the tree changed with the values kept");
         let shared = coarse
             .2
