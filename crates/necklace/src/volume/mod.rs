@@ -579,7 +579,7 @@ fn stuff_lattice(
     *values = CentreValues::default();
     lap(0);
 
-    let background = background::tetrahedralize(&tree.octree, &|c| tree.dead.contains(c));
+    let background = background::tetrahedralize(&tree.octree, &|c| tree.is_dead(&grid, c));
     let positions: Vec<[f64; 3]> = background.keys.iter().map(|&k| grid.point(k)).collect();
     lap(1);
 
@@ -708,14 +708,37 @@ impl Grid {
     }
 }
 
+/// Half a cell's diagonal, in lengths: the farthest a point of the cell is from its
+/// centre.
+fn half_diagonal(size: f64) -> f64 {
+    0.5 * 3f64.sqrt() * size
+}
+
+/// Whether a cell of half diagonal `half_diagonal` whose centre has the value `f` lies
+/// wholly outside the region (`f` beyond the half diagonal; `f` is 1-Lipschitz).
+fn beyond_cell(f: f64, half_diagonal: f64) -> bool {
+    f > half_diagonal * (1.0 + 1e-9)
+}
+
+impl Tree {
+    /// Whether `cell` was seen to lie wholly outside the region (its centre's value
+    /// beyond its half diagonal): tets touching only such leaves produce nothing. A cell
+    /// not evaluated (made by the balance) is not. Derived from the centre values
+    /// rather than kept in a set of its own: on a thin solid most of the tree's cells
+    /// are dead, and a set of them was a hash table as large as the tree.
+    fn is_dead(&self, grid: &Grid, cell: &Cell) -> bool {
+        self.centre_values
+            .get(&cell.center())
+            .is_some_and(|&f| beyond_cell(f, half_diagonal(grid.length(cell.size))))
+    }
+}
+
 /// The octree and what its construction learned about the domain.
 struct Tree {
     octree: Octree,
-    /// Leaves whose closed cube lies wholly outside the region (value at the centre
-    /// beyond the half diagonal): tets touching only such leaves produce nothing.
-    dead: HashSet<Cell>,
     /// The value at every evaluated cell's centre, by key (a key is the centre of at
-    /// most one cell; exact below the cell's band, else a bound of the right sign).
+    /// most one cell; exact below the cell's band, else a bound of the right sign). It
+    /// also tells the dead cells ([`Tree::is_dead`]).
     centre_values: HashMap<Key, f64>,
     leaves: usize,
     estimated_tets: usize,
@@ -939,14 +962,13 @@ fn build_octree(
     // the tree is over the budget whatever follows. (Leaves wholly outside give none:
     // inside a thin solid most of the tree is outside it.)
     let mut count = LeafCount::new(options.max_tets());
-    let mut dead: HashSet<Cell> = HashSet::default();
     let mut centre_values: HashMap<Key, f64> = HashMap::default();
     let mut lists = sizing::FeatureLists::new(features, grid.root, h);
     let to_point = |k: Key| grid.point(k);
     let octree = Octree::build_unless(grid.root, |cells| {
         // All cells of one level have the same size.
         let size = grid.length(cells.first().map_or(0, |c| c.size));
-        let half_diagonal = 0.5 * 3f64.sqrt() * size;
+        let half_diagonal = half_diagonal(size);
         let thin = lists.level(cells, &to_point, grid.unit);
         // In up to eight interleaved parts (`level_parts`), each a sample of the whole
         // level: past the leaves allowed, or once the part evaluated, scaled to the
@@ -987,10 +1009,7 @@ fn build_octree(
             for (&i, f) in part.iter().zip(values) {
                 let cell = &cells[i];
                 centre_values.insert(cell.center(), f);
-                let is_dead = f > half_diagonal * (1.0 + 1e-9);
-                if is_dead {
-                    dead.insert(*cell);
-                }
+                let is_dead = beyond_cell(f, half_diagonal);
                 // Cell sizes are powers of two: take the one nearest the spacing asked
                 // for (within a factor √2). Else only where the boundary may pass (f is
                 // 1-Lipschitz). A margin of one more cell (`half_diagonal + wanted`)
@@ -1029,9 +1048,11 @@ fn build_octree(
     let leaves = octree.leaves();
     // Leaves inside give all their tets, leaves the boundary may cross about half.
     let (mut inside, mut crossed) = (0usize, 0usize);
-    for leaf in leaves.iter().filter(|c| !dead.contains(c)) {
+    for leaf in &leaves {
+        let half_diagonal = half_diagonal(grid.length(leaf.size));
         match centre_values.get(&leaf.center()) {
-            Some(&f) if f < -0.5 * 3f64.sqrt() * grid.length(leaf.size) => inside += 1,
+            Some(&f) if beyond_cell(f, half_diagonal) => {}
+            Some(&f) if f < -half_diagonal => inside += 1,
             _ => crossed += 1,
         }
     }
@@ -1059,7 +1080,6 @@ fn build_octree(
     Ok(Tree {
         leaves: leaves.len(),
         octree,
-        dead,
         centre_values,
         estimated_tets,
         truncations: count.truncations,
@@ -1132,7 +1152,7 @@ fn lattice_values(
         }
         let known = tree.octree.leaf_containing(k).and_then(|leaf| {
             let f = *tree.centre_values.get(&leaf.center())?;
-            let half_diagonal = 0.5 * 3f64.sqrt() * grid.length(leaf.size);
+            let half_diagonal = half_diagonal(grid.length(leaf.size));
             (f.abs() > half_diagonal * (1.0 + 1e-6))
                 .then(|| f.signum() * (f.abs() - half_diagonal).max(1e-6 * half_diagonal))
         });
@@ -1331,8 +1351,10 @@ mod tests {
                 .collect();
             values.sort_unstable();
             let mut dead: Vec<[u64; 3]> = tree
-                .dead
+                .octree
+                .leaves()
                 .iter()
+                .filter(|c| tree.is_dead(&grid, c))
                 .map(|c| grid.point(c.center()).map(f64::to_bits))
                 .collect();
             dead.sort_unstable();
