@@ -257,6 +257,13 @@ pub struct VolumeMesh {
 /// on the wire sphere's shell).
 const TETS_PER_LEAF: f64 = 15.0;
 
+/// A leaf of the octree, wholly outside the region or not, in tets of the budget: its
+/// slots in the tree's tables (the leaves, the centre values, the corners and the level
+/// lists) take about a tet's [`BYTES_PER_TET`] while the tree is built and
+/// tetrahedralized (about 370 bytes a leaf measured on mf_Offset1's inside, most of its
+/// leaves dead). The tets' count binds first wherever dead leaves are few.
+const TETS_PER_CELL: f64 = 1.0;
+
 /// Most halvings of `h` a sizing feature may ask for (the integer grid's resolution).
 const MAX_LEVELS: u32 = 30;
 
@@ -857,10 +864,19 @@ const SAMPLED_EXCESS: f64 = 1.25;
 /// one leaf more (it was split where the boundary may pass or a thin part asks, so it
 /// leaves at least one leaf that gives tets, but for a thin part's split wholly
 /// outside): past the leaves allowed the tree is over the budget whatever follows.
-/// Leaves wholly outside count for nothing (inside a thin solid most of the tree is
-/// outside it).
+/// Leaves wholly outside give no tets (inside a thin solid most of the tree is outside
+/// it), but every leaf takes its slots in the tree's tables while the tree is built and
+/// tetrahedralized, about a tet's bytes ([`TETS_PER_CELL`]): the leaves of every kind
+/// count against the budget too, eight for each split cell.
 struct LeafCount {
     max_leaves: usize,
+    /// The leaves of every kind the budget allows ([`TETS_PER_CELL`]).
+    max_cells: usize,
+    /// Leaves of every kind in the finished levels.
+    finished_cells: usize,
+    /// This level's cells so far, and those of them not split.
+    level_cells: usize,
+    unsplit_cells: usize,
     /// Leaves not wholly outside in the finished levels: inside, crossed (the boundary
     /// may cross them).
     finished: [usize; 2],
@@ -873,9 +889,9 @@ struct LeafCount {
     level: [usize; 2],
     unsplit: [usize; 2],
     truncations: Vec<Truncation>,
-    /// The leaves counted when the tree was given up (the level's count scaled from
-    /// the part of it evaluated).
-    too_big: Option<usize>,
+    /// The tets (or the tables' bytes in tets, if more) counted when the tree was given
+    /// up (the level's count scaled from the part of it evaluated).
+    too_big: Option<f64>,
 }
 
 impl LeafCount {
@@ -883,6 +899,10 @@ impl LeafCount {
     fn new(max_tets: usize) -> Self {
         LeafCount {
             max_leaves: (max_tets as f64 / (0.5 * TETS_PER_LEAF)) as usize + 1,
+            max_cells: (max_tets as f64 / TETS_PER_CELL) as usize,
+            finished_cells: 0,
+            level_cells: 0,
+            unsplit_cells: 0,
             finished: [0; 2],
             size: 0.0,
             leaves: 0,
@@ -897,13 +917,17 @@ impl LeafCount {
     fn start_level(&mut self, size: f64) {
         (self.size, self.leaves, self.split) = (size, 0, 0);
         (self.level, self.unsplit) = ([0; 2], [0; 2]);
+        (self.level_cells, self.unsplit_cells) = (0, 0);
     }
 
     /// One cell of the level: split or not, and `crossed` (whether the boundary may
     /// cross it) unless it is wholly outside.
     fn add(&mut self, split: bool, crossed: Option<bool>) {
+        self.level_cells += 1;
         if split {
             self.split += 1;
+        } else {
+            self.unsplit_cells += 1;
         }
         if let Some(crossed) = crossed {
             let k = usize::from(crossed);
@@ -919,23 +943,33 @@ impl LeafCount {
     /// over the budget (then it is given up, and the level stopped here is the last
     /// truncation, its counts scaled to the whole level). Over when the leaves counted
     /// pass the leaves allowed, or when the level's count scaled from its part passes
-    /// them by [`SAMPLED_EXCESS`] (the parts are samples of the level).
+    /// them by [`SAMPLED_EXCESS`] (the parts are samples of the level); the same for
+    /// the leaves of every kind.
     fn over(&mut self, share: f64) -> bool {
         let finished = self.finished[0] + self.finished[1];
         let scaled = finished as f64 + (self.leaves + self.split) as f64 / share;
+        let cells = self.finished_cells + self.unsplit_cells + 8 * self.split;
+        let cells_scaled =
+            self.finished_cells as f64 + (self.unsplit_cells + 8 * self.split) as f64 / share;
         let over = finished + self.leaves + self.split > self.max_leaves
-            || scaled > SAMPLED_EXCESS * self.max_leaves as f64;
+            || scaled > SAMPLED_EXCESS * self.max_leaves as f64
+            || cells > self.max_cells
+            || cells_scaled > SAMPLED_EXCESS * self.max_cells as f64;
         if over || share >= 1.0 {
             let [inside, crossed] = self.level.map(|n| n as f64 / share);
+            let tets = TETS_PER_LEAF
+                * ((self.finished[0] as f64 + inside) + 0.5 * (self.finished[1] as f64 + crossed));
+            // Stopped here, every cell of the level is a leaf.
+            let stopped_cells = self.finished_cells as f64 + self.level_cells as f64 / share;
             self.truncations.push(Truncation {
                 size: self.size,
-                estimated_tets: TETS_PER_LEAF
-                    * ((self.finished[0] as f64 + inside)
-                        + 0.5 * (self.finished[1] as f64 + crossed)),
+                estimated_tets: tets.max(stopped_cells * TETS_PER_CELL),
             });
         }
         if over {
-            self.too_big = Some(finished + ((self.leaves + self.split) as f64 / share) as usize);
+            let leaves = finished + ((self.leaves + self.split) as f64 / share) as usize;
+            self.too_big =
+                Some((0.5 * TETS_PER_LEAF * leaves as f64).max(cells_scaled * TETS_PER_CELL));
         }
         over
     }
@@ -943,6 +977,7 @@ impl LeafCount {
     fn end_level(&mut self) {
         self.finished[0] += self.unsplit[0];
         self.finished[1] += self.unsplit[1];
+        self.finished_cells += self.unsplit_cells;
     }
 }
 
@@ -1036,7 +1071,7 @@ fn build_octree(
         // The next tree of the search (a coarser floor) takes the values.
         known.take(grid, centre_values);
         let finest = count.truncations.last().map_or(h, |t| t.size);
-        let estimate = 0.5 * TETS_PER_LEAF * count.too_big.unwrap_or(0) as f64;
+        let estimate = count.too_big.unwrap_or(0.0);
         return Err(over_budget(
             estimate,
             count.truncations,
@@ -1064,14 +1099,16 @@ fn build_octree(
             .min()
             .unwrap_or(grid.root.size),
     );
-    if estimated_tets > options.max_tets() {
+    // The tets, or the tables' share where the leaves of every kind weigh more.
+    let weight = (estimated_tets as f64).max(leaves.len() as f64 * TETS_PER_CELL);
+    if weight > options.max_tets() as f64 {
         known.take(grid, centre_values);
         // The balance added cells round the finest ones: the levels are taken to grow
         // in the same proportion, so that a floor at a level still over is not tried
         // (`docs/decisions.md`, Volume mesh).
         return Err(over_budget(
-            estimated_tets as f64,
-            scaled_to(&count.truncations, estimated_tets as f64),
+            weight,
+            scaled_to(&count.truncations, weight),
             None,
             options,
             finest,
@@ -1438,7 +1475,7 @@ mod tests {
             }
             assert_eq!(count.over(0.125), over, "{leaves} leaves in the part");
             if over {
-                assert_eq!(count.too_big, Some(1040));
+                assert_eq!(count.too_big, Some(0.5 * TETS_PER_LEAF * 1040.0));
                 let last = count.truncations.last().expect("the level stopped here");
                 assert_eq!(last.size, 1.0);
             }
@@ -1450,6 +1487,35 @@ mod tests {
             count.add(false, Some(true));
         }
         assert!(count.over(1.0));
+    }
+
+    #[test]
+    fn leaves_wholly_outside_count_against_the_budget_by_their_tables() {
+        // 1 000 tets allow 1 000 leaves of any kind, and 134 that give tets.
+        let max_tets = 1_000;
+        let cells = (max_tets as f64 / TETS_PER_CELL) as usize;
+        // Dead leaves give no tets, but past the cells allowed the tree is over.
+        let mut count = LeafCount::new(max_tets);
+        count.start_level(1.0);
+        for _ in 0..cells {
+            count.add(false, None);
+        }
+        assert!(!count.over(1.0), "as many dead leaves as allowed");
+        count.end_level();
+        count.start_level(0.5);
+        count.add(false, None);
+        assert!(count.over(1.0), "one dead leaf more");
+        assert_eq!(count.too_big, Some((cells + 1) as f64 * TETS_PER_CELL));
+        // Stopped at either level, the tree weighs its leaves, not its (no) tets.
+        let weights: Vec<f64> = count.truncations.iter().map(|t| t.estimated_tets).collect();
+        assert_eq!(weights, vec![cells as f64, (cells + 1) as f64]);
+        // A split dead cell leaves eight leaves at least.
+        let mut count = LeafCount::new(max_tets);
+        count.start_level(1.0);
+        for _ in 0..cells / 8 + 1 {
+            count.add(true, None);
+        }
+        assert!(count.over(1.0), "{} splits", cells / 8 + 1);
     }
 
     #[test]
