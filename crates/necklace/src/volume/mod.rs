@@ -842,7 +842,7 @@ fn over_budget(
         error: Error::new(
             ErrorKind::OverBudget,
             format!(
-                "the volume mesh would have about {estimate:.2e} tets (smallest cells {finest:.2e}), about {} at {BYTES_PER_TET} bytes a tet, over the memory budget of {}: raise it with --max-memory, or pass a larger --h",
+                "the volume mesh would take about {estimate:.2e} tets' memory (its tets, or its octree's cells where they weigh more; smallest cells {finest:.2e}), about {} at {BYTES_PER_TET} bytes a tet, over the memory budget of {}: raise it with --max-memory, or pass a larger --h",
                 memory_text(estimate * BYTES_PER_TET),
                 memory_text(options.max_memory as f64)
             ),
