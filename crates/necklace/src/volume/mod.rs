@@ -993,9 +993,9 @@ fn build_octree(
 ) -> std::result::Result<Tree, Failed> {
     let h = grid.h;
     let coarsest = domain.coarsest_spacing(h).max(h);
-    // Leaves not wholly outside give at least half a leaf's tets each: past this many
-    // the tree is over the budget whatever follows. (Leaves wholly outside give none:
-    // inside a thin solid most of the tree is outside it.)
+    // Leaves not wholly outside give at least half a leaf's tets each, and every leaf
+    // takes about a tet's bytes in the tables: past either count the tree is over the
+    // budget whatever follows ([`LeafCount`]).
     let mut count = LeafCount::new(options.max_tets());
     let mut centre_values: HashMap<Key, f64> = HashMap::default();
     let mut lists = sizing::FeatureLists::new(features, grid.root, h);
