@@ -14,7 +14,12 @@
 //! (= (−1)^index for a non-degenerate critical point, 0 for a regular one). Since the
 //! surface comes first and the outer sphere last, the sum over interior vertices is
 //! χ(K_{S∪I}) − χ(K_S) ([`expected_morse_sum`]): for a connected genus-g surface, g − 1
-//! inside and g outside. Entry points: [`Links::new`] once per mesh, then
+//! inside and g outside. Where the link is a triangulated 2-sphere (checked once per
+//! link), χ(lower link) = lower − upper + 1: the lower and the upper link are full
+//! subcomplexes on complementary vertices, so the sphere less the lower link retracts
+//! onto the upper one, and Alexander duality gives b1(lower) = b0(upper) − 1 (an empty
+//! side gives 0 or 2 by the same formula). Elsewhere the lower link's vertices, edges
+//! and triangles are counted. Entry points: [`Links::new`] once per mesh, then
 //! [`Links::classify`] per field ([`classify`] does both), or
 //! [`Links::classify_again`] for a sequence of fields (the smoothing levels): a vertex
 //! whose link vertices all lie on the same sides of it as at the previous field keeps
@@ -124,9 +129,15 @@ pub fn expected_morse_sum(mesh: &TetMesh) -> MorseExpectation {
 /// The links of a mesh's interior vertices in local indices, built once per mesh so
 /// that classifying a field (every smoothing step) only compares values and joins
 /// small union-find sets: no sorting, no allocation per vertex.
+///
+/// A link's triangles are not kept (they were 40 % of the links' bytes,
+/// `docs/decisions.md`, Morse). Where the link is a triangulated 2-sphere, as at every
+/// interior vertex of a 3-manifold mesh, χ(lower link) follows from the components
+/// (see the module doc); where it is not, its triangles are read from the mesh: its
+/// vertex's tets less the vertex.
 #[derive(Debug, Clone)]
-pub struct Links {
-    kinds: Vec<VertexKind>,
+pub struct Links<'m> {
+    mesh: &'m TetMesh,
     /// Per vertex: its range in `vertices` (empty unless interior); `n + 1` entries.
     vertex_start: Vec<usize>,
     /// Link vertices (global ids), sorted within each link.
@@ -134,9 +145,9 @@ pub struct Links {
     edge_start: Vec<usize>,
     /// Link edges in local indices.
     edges: Vec<[u16; 2]>,
-    triangle_start: Vec<usize>,
-    /// Link triangles in local indices.
-    triangles: Vec<[u16; 3]>,
+    /// The interior vertices whose links are not 2-spheres, in order (none on a
+    /// 3-manifold mesh).
+    not_spheres: Vec<u32>,
 }
 
 /// Which link vertices lay below each vertex at the last field
@@ -163,26 +174,27 @@ const BOUNDARY: VertexClass = VertexClass {
 const LINK_RUN: usize = 4096;
 
 /// The links of a run of vertices, one after the other, and where each vertex's ends
-/// in the three arrays.
+/// in the two arrays.
 #[derive(Default)]
 struct LinkRun {
     vertices: Vec<u32>,
     edges: Vec<[u16; 2]>,
-    triangles: Vec<[u16; 3]>,
-    ends: Vec<[usize; 3]>,
+    ends: Vec<[usize; 2]>,
+    not_spheres: Vec<u32>,
 }
 
 /// One vertex's link in local indices.
 struct Link {
     vertices: Vec<u32>,
     edges: Vec<[u16; 2]>,
-    triangles: Vec<[u16; 3]>,
+    /// Whether it is a triangulated 2-sphere ([`is_sphere`]).
+    sphere: bool,
 }
 
-impl Links {
+impl<'m> Links<'m> {
     /// Build the link of every interior vertex. Fails only when a vertex has more than
     /// 65535 link vertices.
-    pub fn new(mesh: &TetMesh) -> Result<Links> {
+    pub fn new(mesh: &'m TetMesh) -> Result<Links<'m>> {
         // Built in runs of vertices, each into flat arrays of its own, then copied into
         // arrays reserved at their final length: a vector per link, at its capacity
         // before duplicates were removed, held several times the links' size (and
@@ -197,10 +209,11 @@ impl Links {
                         let link = link_of(mesh, v as u32)?;
                         run.vertices.extend(&link.vertices);
                         run.edges.extend(&link.edges);
-                        run.triangles.extend(&link.triangles);
+                        if !link.sphere {
+                            run.not_spheres.push(v as u32);
+                        }
                     }
-                    run.ends
-                        .push([run.vertices.len(), run.edges.len(), run.triangles.len()]);
+                    run.ends.push([run.vertices.len(), run.edges.len()]);
                 }
                 Ok(run)
             })
@@ -212,35 +225,29 @@ impl Links {
             start
         };
         let mut links = Links {
-            kinds: mesh.kinds.clone(),
+            mesh,
             vertex_start: starts(),
             vertices: Vec::with_capacity(total(|r| r.vertices.len())),
             edge_start: starts(),
             edges: Vec::with_capacity(total(|r| r.edges.len())),
-            triangle_start: starts(),
-            triangles: Vec::with_capacity(total(|r| r.triangles.len())),
+            not_spheres: Vec::new(),
         };
         for run in runs {
-            let offsets = [
-                links.vertices.len(),
-                links.edges.len(),
-                links.triangles.len(),
-            ];
+            let offsets = [links.vertices.len(), links.edges.len()];
             for end in &run.ends {
                 links.vertex_start.push(offsets[0] + end[0]);
                 links.edge_start.push(offsets[1] + end[1]);
-                links.triangle_start.push(offsets[2] + end[2]);
             }
             links.vertices.extend(run.vertices);
             links.edges.extend(run.edges);
-            links.triangles.extend(run.triangles);
+            links.not_spheres.extend(run.not_spheres);
         }
         Ok(links)
     }
 
     /// Number of mesh vertices.
     pub fn num_vertices(&self) -> usize {
-        self.kinds.len()
+        self.mesh.num_vertices()
     }
 
     /// Classify every interior vertex for the field `f` (one value per vertex), in
@@ -249,7 +256,7 @@ impl Links {
         let classes: Vec<VertexClass> = (0..self.num_vertices())
             .into_par_iter()
             .map_init(Scratch::default, |s, v| {
-                if self.kinds[v] == VertexKind::Interior {
+                if self.mesh.kinds[v] == VertexKind::Interior {
                     self.classify_vertex(v, f, s)
                 } else {
                     BOUNDARY
@@ -261,8 +268,9 @@ impl Links {
     }
 
     /// Whether `a` comes below `b`: surface first, outer sphere last, else `(f, index)`.
+    #[inline]
     fn below(&self, f: &[f64], a: usize, b: usize) -> bool {
-        let rank = |v: usize| match self.kinds[v] {
+        let rank = |v: usize| match self.mesh.kinds[v] {
             VertexKind::Surface => 0u8,
             VertexKind::Interior => 1,
             VertexKind::Outer => 2,
@@ -290,7 +298,7 @@ impl Links {
         let (words, classes): (Vec<u64>, Vec<VertexClass>) = (0..n)
             .into_par_iter()
             .map_init(Scratch::default, |s, v| {
-                if self.kinds[v] != VertexKind::Interior {
+                if self.mesh.kinds[v] != VertexKind::Interior {
                     return (0, BOUNDARY);
                 }
                 let word = self.side_word(v, f);
@@ -336,7 +344,7 @@ impl Links {
         positions: &[[f64; 3]],
         through: [u32; 2],
     ) -> Option<[f64; 3]> {
-        if self.kinds.get(v) != Some(&VertexKind::Interior) {
+        if self.mesh.kinds.get(v) != Some(&VertexKind::Interior) {
             return None;
         }
         let vertices = &self.vertices[self.vertex_start[v]..self.vertex_start[v + 1]];
@@ -384,7 +392,6 @@ impl Links {
     fn classify_vertex(&self, v: usize, f: &[f64], s: &mut Scratch) -> VertexClass {
         let vertices = &self.vertices[self.vertex_start[v]..self.vertex_start[v + 1]];
         let edges = &self.edges[self.edge_start[v]..self.edge_start[v + 1]];
-        let triangles = &self.triangles[self.triangle_start[v]..self.triangle_start[v + 1]];
         s.is_lower.clear();
         s.is_lower
             .extend(vertices.iter().map(|&u| self.below(f, u as usize, v)));
@@ -411,12 +418,25 @@ impl Links {
                 }
             }
         }
-        let lower_vertices = s.is_lower.iter().filter(|&&l| l).count() as i32;
-        let lower_triangles = triangles
-            .iter()
-            .filter(|t| t.iter().all(|&u| s.is_lower[usize::from(u)]))
-            .count() as i32;
-        let euler_lower = lower_vertices - lower_edges + lower_triangles;
+        let euler_lower = if self.not_spheres.binary_search(&(v as u32)).is_err() {
+            // A full subcomplex of a 2-sphere and the one on the other vertices:
+            // b1(lower) = upper − 1 by Alexander duality (see `classify`).
+            lower as i32 - upper as i32 + 1
+        } else {
+            // Counted: the link's triangles are the faces of v's tets opposite v.
+            let lower_vertices = s.is_lower.iter().filter(|&&l| l).count() as i32;
+            let lower_triangles = self
+                .mesh
+                .vertex_tets(v)
+                .iter()
+                .filter(|&&t| {
+                    self.mesh.tets[t as usize]
+                        .iter()
+                        .all(|&u| u as usize == v || self.below(f, u as usize, v))
+                })
+                .count() as i32;
+            lower_vertices - lower_edges + lower_triangles
+        };
         let kind = match (upper, lower) {
             (1, 1) => VertexType::Regular,
             (0, 1) => VertexType::Maximum,
@@ -466,18 +486,73 @@ fn link_of(mesh: &TetMesh, v: u32) -> Result<Link> {
     }
     let local = |u: u32| vertices.binary_search(&u).unwrap_or(0) as u16;
     let triangles: Vec<[u16; 3]> = global.iter().map(|t| t.map(local)).collect();
+    let mut edges = sorted_edges(&triangles);
+    let sphere = is_sphere(vertices.len(), &triangles, &edges);
+    edges.dedup();
+    Ok(Link {
+        vertices,
+        edges,
+        sphere,
+    })
+}
+
+/// Every triangle's three edges, each low end first, sorted, repeats kept.
+fn sorted_edges(triangles: &[[u16; 3]]) -> Vec<[u16; 2]> {
     let mut edges: Vec<[u16; 2]> = triangles
         .iter()
         .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])])
         .map(|(a, b)| [a.min(b), a.max(b)])
         .collect();
     edges.sort_unstable();
-    edges.dedup();
-    Ok(Link {
-        vertices,
-        edges,
-        triangles,
-    })
+    edges
+}
+
+/// Whether a link is a triangulated 2-sphere: every edge in exactly two triangles (it
+/// is closed), the triangles round every vertex one cycle (a surface, no pinch),
+/// connected, and χ = 2. `edges` holds every triangle's three edges, sorted, repeats
+/// kept.
+fn is_sphere(vertices: usize, triangles: &[[u16; 3]], edges: &[[u16; 2]]) -> bool {
+    let closed = edges.len().is_multiple_of(2)
+        && edges.chunks(2).all(|pair| pair[0] == pair[1])
+        && edges.windows(3).all(|w| w[0] != w[2]);
+    if !closed || vertices as i64 - (edges.len() / 2) as i64 + triangles.len() as i64 != 2 {
+        return false;
+    }
+    // Round each vertex: the edges opposite it, each of its neighbours on two of them;
+    // one cycle when walking from the first comes back after all of them.
+    let mut opposite: Vec<(u16, [u16; 2])> = triangles
+        .iter()
+        .flat_map(|&[a, b, c]| [(a, [b, c]), (b, [a, c]), (c, [a, b])])
+        .collect();
+    opposite.sort_unstable();
+    let mut parent: Vec<u16> = (0..vertices as u16).collect();
+    for star in opposite.chunk_by(|x, y| x.0 == y.0) {
+        let [start, mut at] = star[0].1;
+        let (mut from, mut walked) = (0, 1);
+        while at != start {
+            let Some(next) = (0..star.len()).find(|&i| i != from && star[i].1.contains(&at)) else {
+                return false;
+            };
+            let [a, b] = star[next].1;
+            at = if a == at { b } else { a };
+            from = next;
+            walked += 1;
+            if walked > star.len() {
+                return false;
+            }
+        }
+        if walked != star.len() {
+            return false;
+        }
+        let centre = star[0].0;
+        for &(_, ends) in star {
+            for end in ends {
+                let (re, rc) = (root(&mut parent, end), root(&mut parent, centre));
+                parent[usize::from(re.max(rc))] = re.min(rc);
+            }
+        }
+    }
+    (0..vertices as u16).all(|i| root(&mut parent, i) == 0)
 }
 
 /// Per-thread buffers, reused from vertex to vertex.
@@ -493,4 +568,55 @@ fn root(p: &mut [u16], mut x: u16) -> u16 {
         x = p[usize::from(x)];
     }
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `is_sphere` on triangles given by their corners, edges as `link_of` gives them.
+    fn sphere(vertices: usize, triangles: &[[u16; 3]]) -> bool {
+        is_sphere(vertices, triangles, &sorted_edges(triangles))
+    }
+
+    /// The octahedron on `[+x, −x, +y, −y, +z, −z]`.
+    fn octahedron(v: [u16; 6]) -> Vec<[u16; 3]> {
+        let mut triangles = Vec::new();
+        for x in [v[0], v[1]] {
+            for y in [v[2], v[3]] {
+                for z in [v[4], v[5]] {
+                    triangles.push([x, y, z]);
+                }
+            }
+        }
+        triangles
+    }
+
+    #[test]
+    fn spheres_are_told_from_pinched_open_and_other_closed_links() {
+        assert!(sphere(6, &octahedron([0, 1, 2, 3, 4, 5])));
+        assert!(sphere(4, &[[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]));
+        // Two octahedra sharing two opposite corners: closed, connected, χ = 2, but
+        // pinched at both corners.
+        let mut pinched = octahedron([0, 1, 2, 3, 4, 5]);
+        pinched.extend(octahedron([0, 1, 6, 7, 8, 9]));
+        assert!(!sphere(10, &pinched));
+        // Two spheres apart (χ = 4), a torus (χ = 0), a disk (open).
+        let mut apart = octahedron([0, 1, 2, 3, 4, 5]);
+        apart.extend(octahedron([6, 7, 8, 9, 10, 11]));
+        assert!(!sphere(12, &apart));
+        let at = |i: u16, j: u16| (i % 3) * 3 + j % 3;
+        let torus: Vec<[u16; 3]> = (0..3)
+            .flat_map(|i| {
+                (0..3).flat_map(move |j| {
+                    [
+                        [at(i, j), at(i + 1, j), at(i + 1, j + 1)],
+                        [at(i, j), at(i + 1, j + 1), at(i, j + 1)],
+                    ]
+                })
+            })
+            .collect();
+        assert!(!sphere(9, &torus));
+        assert!(!sphere(3, &[[0, 1, 2]]));
+    }
 }
