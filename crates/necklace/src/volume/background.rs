@@ -56,23 +56,52 @@ fn orient(p: [Key; 4]) -> i128 {
         + u[2] * (v[0] * w[1] - v[1] * w[0])
 }
 
-struct Builder<'a> {
+/// A lattice point as the builder's tables hold it: [`Packed`] in one word where the
+/// root is small enough, else the point itself.
+trait PointKey: Copy + Eq + std::hash::Hash {
+    fn of(k: Key) -> Self;
+}
+
+impl PointKey for Key {
+    fn of(k: Key) -> Key {
+        k
+    }
+}
+
+/// A point of a root of less than [`PACKED_ROOT`] units a side, 21 bits an axis: a
+/// third of a [`Key`]'s bytes in the corner and vertex tables, most of the lattice's
+/// memory besides the tets.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+struct Packed(u64);
+
+/// Roots below this side (in units) have their points packed.
+const PACKED_ROOT: i64 = 1 << 21;
+
+impl PointKey for Packed {
+    fn of(k: Key) -> Packed {
+        debug_assert!(k.iter().all(|&c| (0..PACKED_ROOT).contains(&c)));
+        Packed(k[0] as u64 | (k[1] as u64) << 21 | (k[2] as u64) << 42)
+    }
+}
+
+struct Builder<'a, P> {
     tree: &'a Octree,
     dead: &'a dyn Fn(&Cell) -> bool,
-    corners: HashSet<Key>,
-    index: HashMap<Key, u32>,
+    corners: HashSet<P>,
+    index: HashMap<P, u32>,
     keys: Vec<Key>,
     tets: Vec<[u32; 4]>,
 }
 
-impl Builder<'_> {
+impl<P: PointKey> Builder<'_, P> {
     fn vertex(&mut self, k: Key) -> u32 {
-        if let Some(&i) = self.index.get(&k) {
+        let p = P::of(k);
+        if let Some(&i) = self.index.get(&p) {
             return i;
         }
         let i = self.keys.len() as u32;
         self.keys.push(k);
-        self.index.insert(k, i);
+        self.index.insert(p, i);
         i
     }
 
@@ -92,7 +121,7 @@ impl Builder<'_> {
     fn chain(&self, a: Key, b: Key) -> Vec<Key> {
         let m = midpoint(a, b);
         let even = (0..3).all(|k| (a[k] + b[k]) % 2 == 0);
-        if even && m != a && self.corners.contains(&m) {
+        if even && m != a && self.corners.contains(&P::of(m)) {
             vec![a, m, b]
         } else {
             vec![a, b]
@@ -158,6 +187,16 @@ const TETS_PER_LIVE_LEAF: usize = 18;
 /// Tetrahedralise the leaves of a balanced octree, leaving out the tets that touch only
 /// `dead` leaves (leaves known to lie wholly outside the region).
 pub(crate) fn tetrahedralize(tree: &Octree, dead: &dyn Fn(&Cell) -> bool) -> Background {
+    // The root's far corners are points too: they must stay below the packed range.
+    let root = tree.root;
+    if (0..3).all(|k| root.origin[k] >= 0 && root.origin[k] + root.size < PACKED_ROOT) {
+        build::<Packed>(tree, dead)
+    } else {
+        build::<Key>(tree, dead)
+    }
+}
+
+fn build<P: PointKey>(tree: &Octree, dead: &dyn Fn(&Cell) -> bool) -> Background {
     let leaves = tree.leaves();
     // Reserved for what the tree will hold, no more: a hash table's slots are touched
     // all over as it fills, so the slots reserved cost memory whether used or not.
@@ -169,7 +208,7 @@ pub(crate) fn tetrahedralize(tree: &Octree, dead: &dyn Fn(&Cell) -> bool) -> Bac
     );
     for cell in &leaves {
         for c in 0..8 {
-            corners.insert(cell.corner(c));
+            corners.insert(P::of(cell.corner(c)));
         }
     }
     let mut b = Builder {
@@ -253,6 +292,11 @@ mod tests {
             let b = tetrahedralize(&tree, &|_| false);
             assert_eq!(total_volume(&b), 6 * 32i128.pow(3), "volume of the root");
             assert_conforming(&b, root);
+            // The tables' packed points give the very lattice the points themselves do.
+            let dead = |c: &Cell| c.origin[0] >= 16;
+            let (packed, plain) = (build::<Packed>(&tree, &dead), build::<Key>(&tree, &dead));
+            assert!(packed.keys == plain.keys && packed.tets == plain.tets);
+            assert!(!packed.tets.is_empty() && packed.tets.len() < b.tets.len());
         }
     }
 }

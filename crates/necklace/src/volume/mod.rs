@@ -580,7 +580,7 @@ fn stuff_lattice(
         clock = Instant::now();
     };
     let grid = Grid::new(lo, hi, options.h, features)?;
-    let tree = build_octree(domain, &grid, features, options, values)?;
+    let mut tree = build_octree(domain, &grid, features, options, values)?;
     // A tree that fitted is the last one built, unless its stuffing is over the
     // budget (rare): the earlier trees' values go.
     *values = CentreValues::default();
@@ -592,6 +592,10 @@ fn stuff_lattice(
 
     // Only signs matter at lattice vertices (cut points are found on the true function).
     let values = lattice_values(domain, &grid, &tree, &background.keys, &positions);
+    // The centre values have served (the dead cells, the lattice's signs): their table,
+    // as large as the tree's, is not held through the stuffing, on thin models the
+    // volume stage's peak.
+    drop(std::mem::take(&mut tree.centre_values));
     lap(2);
 
     // The paper's α on every edge.

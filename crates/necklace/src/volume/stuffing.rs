@@ -104,12 +104,16 @@ pub(crate) fn stuff(
             .enumerate()
             .flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
     );
-    // Background tets around each vertex, to check that a warp keeps them positive.
+    // Background tets around each vertex that may warp (an end of a cut edge), to check
+    // that a warp keeps them positive. Only those: on a thin model most of the lattice
+    // lies away from the surface, and the lists of all were the stuffing's peak.
+    let may_warp: Vec<bool> = (0..n).map(|v| !incident.get(v).is_empty()).collect();
     let vertex_tets = Csr::new(
         n,
         tets.iter()
             .enumerate()
-            .flat_map(|(t, tet)| tet.map(|v| (v, t as u32))),
+            .flat_map(|(t, tet)| tet.map(|v| (v, t as u32)))
+            .filter(|&(v, _)| may_warp[v as usize]),
     );
     let volume6 = |p: &[[f64; 3]], t: &[u32; 4], moved: Option<(u32, [f64; 3])>| {
         let at = |v: u32| match moved {
