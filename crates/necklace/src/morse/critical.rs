@@ -420,7 +420,7 @@ impl<'m> Links<'m> {
         }
         let euler_lower = if self.not_spheres.binary_search(&(v as u32)).is_err() {
             // A full subcomplex of a 2-sphere and the one on the other vertices:
-            // b1(lower) = upper − 1 by Alexander duality (see `classify`).
+            // b1(lower) = upper − 1 by Alexander duality (see the module doc).
             lower as i32 - upper as i32 + 1
         } else {
             // Counted: the link's triangles are the faces of v's tets opposite v.
