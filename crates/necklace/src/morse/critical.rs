@@ -183,12 +183,20 @@ struct LinkRun {
     not_spheres: Vec<u32>,
 }
 
-/// One vertex's link in local indices.
+/// One vertex's link in local indices, and the buffers that build it: one per
+/// thread, reused from vertex to vertex.
+#[derive(Default)]
 struct Link {
     vertices: Vec<u32>,
+    /// Its edges, sorted, each once.
     edges: Vec<[u16; 2]>,
     /// Whether it is a triangulated 2-sphere ([`is_sphere`]).
     sphere: bool,
+    /// Its triangles as global corners, then as local ones.
+    global: Vec<[u32; 3]>,
+    triangles: Vec<[u16; 3]>,
+    /// Union–find forest of [`is_sphere`].
+    parent: Vec<u32>,
 }
 
 impl<'m> Links<'m> {
@@ -204,9 +212,10 @@ impl<'m> Links<'m> {
             .into_par_iter()
             .map(|r| {
                 let mut run = LinkRun::default();
+                let mut link = Link::default();
                 for v in r * LINK_RUN..n.min((r + 1) * LINK_RUN) {
                     if mesh.kinds[v] == VertexKind::Interior {
-                        let link = link_of(mesh, v as u32)?;
+                        link_of(mesh, v as u32, &mut link)?;
                         run.vertices.extend(&link.vertices);
                         run.edges.extend(&link.edges);
                         if !link.sphere {
@@ -454,25 +463,25 @@ impl<'m> Links<'m> {
     }
 }
 
-/// The link of interior vertex `v`: the faces opposite `v` in its tets.
-fn link_of(mesh: &TetMesh, v: u32) -> Result<Link> {
-    let global: Vec<[u32; 3]> = mesh
-        .vertex_tets(v as usize)
-        .iter()
-        .map(|&t| {
-            let tet = mesh.tets[t as usize];
+/// The link of interior vertex `v`, the faces opposite `v` in its tets, into `link`.
+fn link_of(mesh: &TetMesh, v: u32, link: &mut Link) -> Result<()> {
+    link.global.clear();
+    link.global
+        .extend(mesh.vertex_tets(v as usize).iter().map(|&t| {
             let mut tri = [0u32; 3];
             let mut k = 0;
-            for &u in &tet {
+            for &u in &mesh.tets[t as usize] {
                 if u != v && k < 3 {
                     tri[k] = u;
                     k += 1;
                 }
             }
+            tri.sort_unstable();
             tri
-        })
-        .collect();
-    let mut vertices: Vec<u32> = global.iter().flatten().copied().collect();
+        }));
+    let vertices = &mut link.vertices;
+    vertices.clear();
+    vertices.extend(link.global.iter().flatten());
     vertices.sort_unstable();
     vertices.dedup();
     if vertices.len() > usize::from(u16::MAX) {
@@ -484,75 +493,99 @@ fn link_of(mesh: &TetMesh, v: u32) -> Result<Link> {
             ),
         ));
     }
+    // Local indices keep the global order, so each triangle's corners stay sorted.
     let local = |u: u32| vertices.binary_search(&u).unwrap_or(0) as u16;
-    let triangles: Vec<[u16; 3]> = global.iter().map(|t| t.map(local)).collect();
-    let mut edges = sorted_edges(&triangles);
-    let sphere = is_sphere(vertices.len(), &triangles, &edges);
-    edges.dedup();
-    Ok(Link {
-        vertices,
-        edges,
-        sphere,
-    })
+    link.triangles.clear();
+    link.triangles
+        .extend(link.global.iter().map(|t| t.map(local)));
+    sorted_edges_into(&link.triangles, &mut link.edges);
+    link.sphere = is_sphere(
+        vertices.len(),
+        &link.triangles,
+        &link.edges,
+        &mut link.parent,
+    );
+    link.edges.dedup();
+    Ok(())
 }
 
-/// Every triangle's three edges, each low end first, sorted, repeats kept.
-fn sorted_edges(triangles: &[[u16; 3]]) -> Vec<[u16; 2]> {
-    let mut edges: Vec<[u16; 2]> = triangles
-        .iter()
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])])
-        .map(|(a, b)| [a.min(b), a.max(b)])
-        .collect();
+/// Every triangle's three edges (the triangle's corners sorted), each low end first,
+/// sorted, repeats kept.
+fn sorted_edges_into(triangles: &[[u16; 3]], edges: &mut Vec<[u16; 2]>) {
+    edges.clear();
+    edges.extend(
+        triangles
+            .iter()
+            .flat_map(|&[a, b, c]| [[a, b], [a, c], [b, c]]),
+    );
     edges.sort_unstable();
-    edges
 }
 
 /// Whether a link is a triangulated 2-sphere: every edge in exactly two triangles (it
 /// is closed), the triangles round every vertex one cycle (a surface, no pinch),
-/// connected, and χ = 2. `edges` holds every triangle's three edges, sorted, repeats
-/// kept.
-fn is_sphere(vertices: usize, triangles: &[[u16; 3]], edges: &[[u16; 2]]) -> bool {
+/// connected, and χ = 2. Each triangle's corners are sorted; `edges` holds every
+/// triangle's three edges, sorted, repeats kept; `parent` is a buffer.
+///
+/// Round a vertex, its triangles are joined across the edges they share at it. With
+/// every edge in two triangles, the triangles round each vertex form disjoint cycles,
+/// one union–find set each over the vertex's ends of its edges (edge `e`'s low end is
+/// element `2e`, its high end `2e + 1`). The link is a surface when there are as many
+/// sets as vertices.
+fn is_sphere(
+    vertices: usize,
+    triangles: &[[u16; 3]],
+    edges: &[[u16; 2]],
+    parent: &mut Vec<u32>,
+) -> bool {
     let closed = edges.len().is_multiple_of(2)
         && edges.chunks(2).all(|pair| pair[0] == pair[1])
         && edges.windows(3).all(|w| w[0] != w[2]);
-    if !closed || vertices as i64 - (edges.len() / 2) as i64 + triangles.len() as i64 != 2 {
+    let distinct = edges.len() / 2;
+    if !closed || vertices as i64 - distinct as i64 + triangles.len() as i64 != 2 {
         return false;
     }
-    // Round each vertex: the edges opposite it, each of its neighbours on two of them;
-    // one cycle when walking from the first comes back after all of them.
-    let mut opposite: Vec<(u16, [u16; 2])> = triangles
-        .iter()
-        .flat_map(|&[a, b, c]| [(a, [b, c]), (b, [a, c]), (c, [a, b])])
-        .collect();
-    opposite.sort_unstable();
-    let mut parent: Vec<u16> = (0..vertices as u16).collect();
-    for star in opposite.chunk_by(|x, y| x.0 == y.0) {
-        let [start, mut at] = star[0].1;
-        let (mut from, mut walked) = (0, 1);
-        while at != start {
-            let Some(next) = (0..star.len()).find(|&i| i != from && star[i].1.contains(&at)) else {
-                return false;
-            };
-            let [a, b] = star[next].1;
-            at = if a == at { b } else { a };
-            from = next;
-            walked += 1;
-            if walked > star.len() {
-                return false;
-            }
-        }
-        if walked != star.len() {
-            return false;
-        }
-        let centre = star[0].0;
-        for &(_, ends) in star {
-            for end in ends {
-                let (re, rc) = (root(&mut parent, end), root(&mut parent, centre));
-                parent[usize::from(re.max(rc))] = re.min(rc);
-            }
+    // Edges come in pairs, so the first copy's position halved numbers the edge.
+    let index = |a: u16, b: u16| (edges.partition_point(|e| *e < [a, b]) / 2) as u32;
+    parent.clear();
+    parent.extend(0..2 * distinct as u32);
+    let mut sets = 2 * distinct;
+    for &[a, b, c] in triangles {
+        let (ab, ac, bc) = (index(a, b), index(a, c), index(b, c));
+        for (x, y) in [
+            (2 * ab, 2 * ac),
+            (2 * ab + 1, 2 * bc),
+            (2 * ac + 1, 2 * bc + 1),
+        ] {
+            sets -= usize::from(union(parent, x, y));
         }
     }
-    (0..vertices as u16).all(|i| root(&mut parent, i) == 0)
+    if sets != vertices {
+        return false;
+    }
+    // Connected: the edges join the vertices into one set.
+    parent.clear();
+    parent.extend(0..vertices as u32);
+    let mut sets = vertices;
+    for pair in edges.chunks(2) {
+        let [a, b] = pair[0];
+        sets -= usize::from(union(parent, u32::from(a), u32::from(b)));
+    }
+    sets == 1
+}
+
+/// Join the sets of `x` and `y` (the lower root becomes the root); whether they were
+/// apart.
+fn union(parent: &mut [u32], x: u32, y: u32) -> bool {
+    let find = |parent: &mut [u32], mut x: u32| {
+        while parent[x as usize] != x {
+            parent[x as usize] = parent[parent[x as usize] as usize];
+            x = parent[x as usize];
+        }
+        x
+    };
+    let (rx, ry) = (find(parent, x), find(parent, y));
+    parent[rx.max(ry) as usize] = rx.min(ry);
+    rx != ry
 }
 
 /// Per-thread buffers, reused from vertex to vertex.
@@ -576,7 +609,17 @@ mod tests {
 
     /// `is_sphere` on triangles given by their corners, edges as `link_of` gives them.
     fn sphere(vertices: usize, triangles: &[[u16; 3]]) -> bool {
-        is_sphere(vertices, triangles, &sorted_edges(triangles))
+        let triangles: Vec<[u16; 3]> = triangles
+            .iter()
+            .map(|t| {
+                let mut t = *t;
+                t.sort_unstable();
+                t
+            })
+            .collect();
+        let mut edges = Vec::new();
+        sorted_edges_into(&triangles, &mut edges);
+        is_sphere(vertices, &triangles, &edges, &mut Vec::new())
     }
 
     /// The octahedron on `[+x, −x, +y, −y, +z, −z]`.
@@ -617,6 +660,10 @@ mod tests {
             })
             .collect();
         assert!(!sphere(9, &torus));
+        // A sphere and a torus apart: closed, no pinch, χ = 2, but not connected.
+        let mut sphere_and_torus = octahedron([0, 1, 2, 3, 4, 5]);
+        sphere_and_torus.extend(torus.iter().map(|t| t.map(|i| i + 6)));
+        assert!(!sphere(15, &sphere_and_torus));
         assert!(!sphere(3, &[[0, 1, 2]]));
     }
 }
