@@ -89,6 +89,9 @@ struct Builder<'a, P> {
     dead: &'a dyn Fn(&Cell) -> bool,
     corners: HashSet<P>,
     index: HashMap<P, u32>,
+    /// The vertices the current cell's tets have used: each cell's tets share about
+    /// fifteen vertices among some seventy corners, and the table is large.
+    near: Vec<(P, u32)>,
     keys: Vec<Key>,
     tets: Vec<[u32; 4]>,
 }
@@ -96,12 +99,19 @@ struct Builder<'a, P> {
 impl<P: PointKey> Builder<'_, P> {
     fn vertex(&mut self, k: Key) -> u32 {
         let p = P::of(k);
-        if let Some(&i) = self.index.get(&p) {
+        if let Some(&(_, i)) = self.near.iter().find(|(q, _)| *q == p) {
             return i;
         }
-        let i = self.keys.len() as u32;
-        self.keys.push(k);
-        self.index.insert(p, i);
+        let i = match self.index.get(&p) {
+            Some(&i) => i,
+            None => {
+                let i = self.keys.len() as u32;
+                self.keys.push(k);
+                self.index.insert(p, i);
+                i
+            }
+        };
+        self.near.push((p, i));
         i
     }
 
@@ -117,14 +127,15 @@ impl<P: PointKey> Builder<'_, P> {
         self.tets.push(t);
     }
 
-    /// The points along edge a→b: the ends, and the midpoint if it is a cell corner.
-    fn chain(&self, a: Key, b: Key) -> Vec<Key> {
+    /// The points along edge a→b: the ends, and the midpoint if it is a cell corner
+    /// (the points are the first `n` of the array).
+    fn chain(&self, a: Key, b: Key) -> ([Key; 3], usize) {
         let m = midpoint(a, b);
         let even = (0..3).all(|k| (a[k] + b[k]) % 2 == 0);
         if even && m != a && self.corners.contains(&P::of(m)) {
-            vec![a, m, b]
+            ([a, m, b], 3)
         } else {
-            vec![a, b]
+            ([a, b, b], 2)
         }
     }
 
@@ -132,28 +143,34 @@ impl<P: PointKey> Builder<'_, P> {
     fn cone(&mut self, apex: Key, quad: [Key; 4]) {
         let centre = midpoint(quad[0], quad[2]);
         for i in 0..4 {
-            let chain = self.chain(quad[i], quad[(i + 1) % 4]);
-            for w in chain.windows(2) {
+            let (chain, n) = self.chain(quad[i], quad[(i + 1) % 4]);
+            for w in chain[..n].windows(2) {
                 self.tet([apex, centre, w[0], w[1]]);
             }
         }
     }
 
     fn cell(&mut self, cell: Cell) {
+        self.near.clear();
         let c = cell.center();
         let dead = (self.dead)(&cell);
         for axis in 0..3 {
             for side in [-1i64, 1] {
+                // A dead cell gives tets only towards a leaf of its size on its high
+                // side (the leaf across gives those on its low side).
+                if dead && side < 0 {
+                    continue;
+                }
                 let quad = face_corners(&cell, axis, side);
                 let mut probe = c;
                 probe[axis] += side * (cell.size / 2 + 1);
-                match self.tree.leaf_containing_from(probe, cell.size / 2) {
+                match self.tree.leaf_containing_near(probe, cell.size) {
                     Some(n) if n.size == cell.size => {
                         if side > 0 && !(dead && (self.dead)(&n)) {
                             let cn = n.center();
                             for i in 0..4 {
-                                let chain = self.chain(quad[i], quad[(i + 1) % 4]);
-                                for w in chain.windows(2) {
+                                let (chain, k) = self.chain(quad[i], quad[(i + 1) % 4]);
+                                for w in chain[..k].windows(2) {
                                     self.tet([c, cn, w[0], w[1]]);
                                 }
                             }
@@ -216,6 +233,7 @@ fn build<P: PointKey>(tree: &Octree, dead: &dyn Fn(&Cell) -> bool) -> Background
         dead,
         corners,
         index: HashMap::with_capacity_and_hasher(live * VERTICES_PER_LIVE_LEAF, Default::default()),
+        near: Vec::new(),
         keys: Vec::new(),
         tets: Vec::with_capacity(live * TETS_PER_LIVE_LEAF),
     };

@@ -115,6 +115,24 @@ impl Octree {
         self.leaf_containing_from(p, 2)
     }
 
+    /// [`Octree::leaf_containing`] for a point next to a leaf of side `size`: the
+    /// balanced tree's leaf there is most often as large, else half or twice as large,
+    /// and those are looked up first.
+    pub fn leaf_containing_near(&self, p: Key, size: i64) -> Option<Cell> {
+        if !self.contains(p) {
+            return None;
+        }
+        for s in [size, size / 2] {
+            if s >= 2 && s <= self.root.size {
+                let cell = cell_at(self.root, p, s);
+                if self.leaves.contains(&cell) {
+                    return Some(cell);
+                }
+            }
+        }
+        self.leaf_containing_from(p, 2 * size)
+    }
+
     /// [`Octree::leaf_containing`] when the leaf is known to be at least `min_size`
     /// (fewer lookups: balanced neighbours are at least half a cell's size).
     pub fn leaf_containing_from(&self, p: Key, min_size: i64) -> Option<Cell> {
