@@ -1,21 +1,33 @@
 //! Bounding volume hierarchy over triangles, in flat arrays, with the exact
 //! point–triangle distance, the nearest-triangle query and the nearest ray hit.
 //!
-//! The tree is built top-down by splitting each node's triangles at the median of their
-//! centroids along the longest axis of the centroid bounds, until a node holds at most
-//! [`LEAF_SIZE`] triangles. A median split halves the count at every level, so the depth
-//! is at most ⌈log₂(n / LEAF_SIZE)⌉ + 1 (≤ 32 for any `u32` count), which bounds the
-//! fixed-size traversal stacks below. Triangles are stored reordered so that every node,
-//! leaf or not, owns a contiguous range of them.
+//! The tree is built top-down. Each node's triangles are split where the surface-area
+//! heuristic is lowest, the candidates being the boundaries of 16 bins of the centroids
+//! along each axis: the split minimises `area(left box) · count(left) + area(right box) ·
+//! count(right)`. On CAD models, whose long thin triangles have boxes much larger than
+//! their centroids' spread, a split at the median made children whose boxes overlap,
+//! and queries visited both. Where all centroids fall in one bin, and below
+//! [`SAH_DEPTH`] levels, the split is at the median of the centroids along the longest
+//! axis, which halves the count; so the depth is below [`SAH_DEPTH`] + ⌈log₂(n /
+//! LEAF_SIZE)⌉ + 1 (< 64 for any `u32` count), which bounds the fixed-size traversal
+//! stacks below. Nodes split until they hold at most [`LEAF_SIZE`] triangles.
+//! Triangles are stored reordered so that every node, leaf or not, owns a contiguous
+//! range of them.
 
 use crate::geom::{bounds, closest_on_triangle, cross, dot, norm, sub};
 
 /// A node splits when it holds more triangles than this (leaves hold 4 to 8).
 pub(super) const LEAF_SIZE: usize = 8;
 
-/// Room for any traversal stack: depth + 1 entries are enough, and the depth of a
-/// median-split tree over at most 2³² triangles is below 32.
+/// Room for any traversal stack: depth + 1 entries are enough, and the depth is below
+/// [`SAH_DEPTH`] + 31 for at most 2³² triangles.
 pub(super) const STACK: usize = 64;
+
+/// Levels split by the surface-area heuristic; deeper nodes split at the median.
+const SAH_DEPTH: usize = 32;
+
+/// Bins of the centroids per axis for the surface-area heuristic.
+const SAH_BINS: usize = 16;
 
 /// One node: its box, its triangle range, and its children if any.
 #[derive(Debug, Clone, Copy)]
@@ -109,7 +121,7 @@ impl Bvh {
             .zip(faces)
             .map(|(corners, face)| Item { corners, face })
             .collect();
-        let nodes = subtree(&mut items, 0);
+        let nodes = subtree(&mut items, 0, 0);
         let (tris_sorted, faces_sorted) = items
             .into_par_iter()
             .map(|it| (it.corners, it.face))
@@ -286,15 +298,18 @@ fn item_bounds(items: &[Item]) -> ([f64; 3], [f64; 3]) {
 /// The nodes of the subtree over `items` (the first is number `offset` in tree order),
 /// with its root at index 0 and children indexed within the returned nodes. `items` is
 /// left in tree order.
-fn subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
+fn subtree(items: &mut [Item], offset: usize, depth: usize) -> Vec<Node> {
     let n = items.len();
     if n <= PARALLEL_SPLIT {
-        return sequential_subtree(items, offset);
+        return sequential_subtree(items, offset, depth);
     }
     let (lo, hi) = item_bounds(items);
-    let mid = split(items);
+    let mid = split(items, depth);
     let (first, second) = items.split_at_mut(mid);
-    let (left, right) = rayon::join(|| subtree(first, offset), || subtree(second, offset + mid));
+    let (left, right) = rayon::join(
+        || subtree(first, offset, depth + 1),
+        || subtree(second, offset + mid, depth + 1),
+    );
     // The root, its two children, the rest of the left subtree, the rest of the right.
     let (nl, nr) = (left.len(), right.len());
     let mut nodes = Vec::with_capacity(1 + nl + nr);
@@ -323,7 +338,7 @@ fn subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
 }
 
 /// [`subtree`] on one thread: nodes in the order they are split (depth first).
-fn sequential_subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
+fn sequential_subtree(items: &mut [Item], offset: usize, depth: usize) -> Vec<Node> {
     let mut nodes = vec![Node {
         lo: [0.0; 3],
         hi: [0.0; 3],
@@ -331,8 +346,8 @@ fn sequential_subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
         start: 0,
         end: items.len() as u32,
     }];
-    let mut todo = vec![0usize];
-    while let Some(ni) = todo.pop() {
+    let mut todo = vec![(0usize, depth)];
+    while let Some((ni, depth)) = todo.pop() {
         let (s, e) = (nodes[ni].start as usize, nodes[ni].end as usize);
         let (lo, hi) = item_bounds(&items[s..e]);
         nodes[ni].lo = lo;
@@ -340,7 +355,7 @@ fn sequential_subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
         if e - s <= LEAF_SIZE {
             continue;
         }
-        let mid = s + split(&mut items[s..e]);
+        let mid = s + split(&mut items[s..e], depth);
         let left = nodes.len();
         for (start, end) in [(s, mid), (mid, e)] {
             nodes.push(Node {
@@ -352,8 +367,8 @@ fn sequential_subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
             });
         }
         nodes[ni].left = left as u32;
-        todo.push(left);
-        todo.push(left + 1);
+        todo.push((left, depth + 1));
+        todo.push((left + 1, depth + 1));
     }
     for node in &mut nodes {
         node.start += offset as u32;
@@ -362,11 +377,28 @@ fn sequential_subtree(items: &mut [Item], offset: usize) -> Vec<Node> {
     nodes
 }
 
-/// Split `items` (a node's triangles) at the median of their centroids along the
-/// longest axis of the centroid bounds; returns the first index of the second half.
-fn split(items: &mut [Item]) -> usize {
+/// Split `items` (a node's triangles, more than one) at `depth` in the tree: where the
+/// surface-area heuristic is lowest, else at the median (see the module doc). Returns
+/// the first index of the second part; both parts are non-empty.
+fn split(items: &mut [Item], depth: usize) -> usize {
     let (clo, chi) = bounds(items.iter().map(Item::centroid));
     let ext = sub(chi, clo);
+    if depth < SAH_DEPTH {
+        if let Some((axis, last)) = sah_split(items, clo, ext) {
+            let bin = |it: &Item| bin_of(it.centroid_on(axis), clo[axis], ext[axis]);
+            // Two-pointer partition: bins up to `last` first.
+            let (mut i, mut j) = (0, items.len());
+            while i < j {
+                if bin(&items[i]) <= last {
+                    i += 1;
+                } else {
+                    j -= 1;
+                    items.swap(i, j);
+                }
+            }
+            return i;
+        }
+    }
     let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
         0
     } else if ext[1] >= ext[2] {
@@ -380,6 +412,78 @@ fn split(items: &mut [Item]) -> usize {
         a.centroid_on(axis).total_cmp(&b.centroid_on(axis))
     });
     mid
+}
+
+/// The bin of a centroid coordinate `c` along an axis whose centroids span `[lo, lo +
+/// ext]` (`ext > 0`).
+#[inline]
+fn bin_of(c: f64, lo: f64, ext: f64) -> usize {
+    (((c - lo) / ext * SAH_BINS as f64) as usize).min(SAH_BINS - 1)
+}
+
+/// Half the surface area of a box.
+fn half_area(lo: [f64; 3], hi: [f64; 3]) -> f64 {
+    let d = sub(hi, lo);
+    d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+}
+
+/// The axis and the last bin of the first part of the cheapest split by the
+/// surface-area heuristic over [`SAH_BINS`] bins of the centroids per axis; `None`
+/// where no axis has two non-empty parts.
+fn sah_split(items: &[Item], clo: [f64; 3], ext: [f64; 3]) -> Option<(usize, usize)> {
+    let mut best: Option<(f64, usize, usize)> = None;
+    for axis in 0..3 {
+        if !(ext[axis] > 0.0 && ext[axis].is_finite()) {
+            continue;
+        }
+        let mut count = [0usize; SAH_BINS];
+        let mut boxes = [([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]); SAH_BINS];
+        for it in items {
+            let b = bin_of(it.centroid_on(axis), clo[axis], ext[axis]);
+            count[b] += 1;
+            let (lo, hi) = &mut boxes[b];
+            for corner in it.corners {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(corner[k]);
+                    hi[k] = hi[k].max(corner[k]);
+                }
+            }
+        }
+        // Cost of the parts left of each boundary, then of those right of it.
+        let join = |a: ([f64; 3], [f64; 3]), b: &([f64; 3], [f64; 3])| {
+            (
+                [0, 1, 2].map(|k| a.0[k].min(b.0[k])),
+                [0, 1, 2].map(|k| a.1[k].max(b.1[k])),
+            )
+        };
+        let empty = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut left_cost = [0.0; SAH_BINS];
+        let mut left_count = [0usize; SAH_BINS];
+        let (mut acc, mut n) = (empty, 0);
+        for b in 0..SAH_BINS {
+            acc = join(acc, &boxes[b]);
+            n += count[b];
+            left_count[b] = n;
+            left_cost[b] = if n > 0 {
+                half_area(acc.0, acc.1) * n as f64
+            } else {
+                0.0
+            };
+        }
+        let (mut acc, mut n) = (empty, 0);
+        for last in (0..SAH_BINS - 1).rev() {
+            acc = join(acc, &boxes[last + 1]);
+            n += count[last + 1];
+            if n == 0 || left_count[last] == 0 {
+                continue;
+            }
+            let cost = left_cost[last] + half_area(acc.0, acc.1) * n as f64;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, last));
+            }
+        }
+    }
+    best.map(|(_, axis, last)| (axis, last))
 }
 
 /// Whether two triangles cross: an edge of one passes through the interior of the
@@ -485,6 +589,48 @@ mod tests {
         }
     }
 
+    /// The depth of the subtree at `a` (a leaf has depth 0).
+    fn depth(nodes: &[Node], a: usize) -> usize {
+        let n = nodes[a];
+        if n.is_leaf() {
+            0
+        } else {
+            1 + depth(nodes, n.left as usize).max(depth(nodes, n.left as usize + 1))
+        }
+    }
+
+    #[test]
+    fn geometric_spacing_keeps_the_tree_shallow_and_the_nearest_exact() {
+        // Centroids at 2^-i: most of them in the first bin of every split, so the
+        // surface-area heuristic cuts off a few at a time until the median takes over.
+        let tris: Vec<[[f64; 3]; 3]> = (0..3000)
+            .map(|i| {
+                let x = (-(i as f64) / 40.0).exp2();
+                [[x, 0.0, 0.0], [x, 1e-3 * x, 0.0], [x, 0.0, 1e-3 * x]]
+            })
+            .collect();
+        let faces: Vec<u32> = (0..tris.len() as u32).collect();
+        let bvh = Bvh::build(tris.clone(), faces);
+        let d = depth(&bvh.nodes, 0);
+        assert!(d < SAH_DEPTH + 12, "depth {d}");
+        for q in [
+            [0.5, 0.1, 0.0],
+            [1e-6, 0.0, 1e-9],
+            [-1.0, 0.0, 0.0],
+            [0.03, -0.2, 0.1],
+        ] {
+            let (_, _, d2) = bvh.nearest(q).unwrap();
+            let brute = tris
+                .iter()
+                .map(|&[a, b, c]| {
+                    let e = sub(q, closest_on_triangle(q, a, b, c));
+                    dot(e, e)
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(d2, brute);
+        }
+    }
+
     #[test]
     fn the_parallel_build_is_the_one_thread_tree() {
         let tris = scattered(3 * PARALLEL_SPLIT);
@@ -499,7 +645,7 @@ mod tests {
                 face: f as u32,
             })
             .collect();
-        let one_thread = sequential_subtree(&mut items, 0);
+        let one_thread = sequential_subtree(&mut items, 0, 0);
         let order: Vec<u32> = items.iter().map(|it| it.face).collect();
         assert_eq!(bvh.faces, order);
         // The split compares centroids as the mesh code computes them.
