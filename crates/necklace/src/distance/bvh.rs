@@ -431,24 +431,32 @@ fn half_area(lo: [f64; 3], hi: [f64; 3]) -> f64 {
 /// surface-area heuristic over [`SAH_BINS`] bins of the centroids per axis; `None`
 /// where no axis has two non-empty parts.
 fn sah_split(items: &[Item], clo: [f64; 3], ext: [f64; 3]) -> Option<(usize, usize)> {
-    let mut best: Option<(f64, usize, usize)> = None;
-    for axis in 0..3 {
-        if !(ext[axis] > 0.0 && ext[axis].is_finite()) {
-            continue;
-        }
-        let mut count = [0usize; SAH_BINS];
-        let mut boxes = [([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]); SAH_BINS];
-        for it in items {
+    let usable = ext.map(|e| e > 0.0 && e.is_finite());
+    let empty = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    // Every axis's bins in one pass: each triangle's box is taken once.
+    let mut count = [[0usize; SAH_BINS]; 3];
+    let mut boxes = [[empty; SAH_BINS]; 3];
+    for it in items {
+        let (lo, hi) = bounds(it.corners);
+        for axis in 0..3 {
+            if !usable[axis] {
+                continue;
+            }
             let b = bin_of(it.centroid_on(axis), clo[axis], ext[axis]);
-            count[b] += 1;
-            let (lo, hi) = &mut boxes[b];
-            for corner in it.corners {
-                for k in 0..3 {
-                    lo[k] = lo[k].min(corner[k]);
-                    hi[k] = hi[k].max(corner[k]);
-                }
+            count[axis][b] += 1;
+            let (blo, bhi) = &mut boxes[axis][b];
+            for k in 0..3 {
+                blo[k] = blo[k].min(lo[k]);
+                bhi[k] = bhi[k].max(hi[k]);
             }
         }
+    }
+    let mut best: Option<(f64, usize, usize)> = None;
+    for axis in 0..3 {
+        if !usable[axis] {
+            continue;
+        }
+        let (count, boxes) = (&count[axis], &boxes[axis]);
         // Cost of the parts left of each boundary, then of those right of it.
         let join = |a: ([f64; 3], [f64; 3]), b: &([f64; 3], [f64; 3])| {
             (
@@ -456,7 +464,6 @@ fn sah_split(items: &[Item], clo: [f64; 3], ext: [f64; 3]) -> Option<(usize, usi
                 [0, 1, 2].map(|k| a.1[k].max(b.1[k])),
             )
         };
-        let empty = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut left_cost = [0.0; SAH_BINS];
         let mut left_count = [0usize; SAH_BINS];
         let (mut acc, mut n) = (empty, 0);
