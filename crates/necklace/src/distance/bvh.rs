@@ -6,8 +6,8 @@
 //! along each axis: the split minimises `area(left box) · count(left) + area(right box) ·
 //! count(right)`. On CAD models, whose long thin triangles have boxes much larger than
 //! their centroids' spread, a split at the median made children whose boxes overlap,
-//! and queries visited both. Where all centroids fall in one bin, and below
-//! [`SAH_DEPTH`] levels, the split is at the median of the centroids along the longest
+//! and queries visited both. Where all centroids fall in one bin, and from depth
+//! [`SAH_DEPTH`] on, the split is at the median of the centroids along the longest
 //! axis, which halves the count; so the depth is below [`SAH_DEPTH`] + ⌈log₂(n /
 //! LEAF_SIZE)⌉ + 1 (< 64 for any `u32` count), which bounds the fixed-size traversal
 //! stacks below. Nodes split until they hold at most [`LEAF_SIZE`] triangles.

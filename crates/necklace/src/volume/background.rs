@@ -89,8 +89,9 @@ struct Builder<'a, P> {
     dead: &'a dyn Fn(&Cell) -> bool,
     corners: HashSet<P>,
     index: HashMap<P, u32>,
-    /// The vertices the current cell's tets have used: each cell's tets share about
-    /// fifteen vertices among some seventy corners, and the table is large.
+    /// The vertices the current cell's tets have used, in front of `index`: a cell's
+    /// tets (some eighteen, seventy tet corners) share about fifteen vertices, and the
+    /// table is large.
     near: Vec<(P, u32)>,
     keys: Vec<Key>,
     tets: Vec<[u32; 4]>,
