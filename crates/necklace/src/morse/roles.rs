@@ -275,6 +275,17 @@ impl Sweep {
             .map(|v| (f[v as usize], v))
             .collect();
         interior.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
+        // What the sweep reads of each vertex beside its neighbours, in the sweep's
+        // order: read at the vertex's own place, every step waited on a cache miss.
+        let visits: Vec<(VertexType, f64)> = interior
+            .iter()
+            .map(|&(_, v)| {
+                (
+                    classification.classes[v as usize].kind,
+                    distance[v as usize],
+                )
+            })
+            .collect();
         let outer = (0..n as u32).filter(|&v| self.kinds[v as usize] == VertexKind::Outer);
 
         let mut forest = Forest::new(n, self.potential_words());
@@ -305,21 +316,18 @@ impl Sweep {
         let mut closers = Vec::new();
         let mut value = vec![0u64; w];
         let mut root_into = vec![0u64; w];
-        for &(_, v) in &interior {
+        for (&(_, v), &(kind, d)) in interior.iter().zip(&visits) {
             let vi = v as usize;
             added[vi] = true;
             top[vi] = v;
-            fattest[vi] = distance[vi];
+            fattest[vi] = d;
             roots.clear();
             into.clear();
             // Slots of v's edges to vertices above it.
             let mut upper = (self.start[vi]..self.start[vi + 1])
                 .filter(|&s| added[self.neighbours[s] as usize]);
             let mut new_cycles = 0;
-            if matches!(
-                classification.classes[vi].kind,
-                VertexType::Saddle2 | VertexType::Degenerate
-            ) {
+            if matches!(kind, VertexType::Saddle2 | VertexType::Degenerate) {
                 through.clear();
                 for slot in upper {
                     let root = self.path_into(&mut forest, slot, &mut value);
@@ -368,7 +376,7 @@ impl Sweep {
                 roots.push(self.path_into(&mut forest, slot, &mut value));
                 into.extend_from_slice(&value);
             }
-            if classification.classes[vi].kind == VertexType::Saddle2 {
+            if kind == VertexType::Saddle2 {
                 let mut role = self.role_of(v, f, distance, &roots, &top, &fattest);
                 role.essential = role.role == SaddleRole::CycleClosing && new_cycles > 0;
                 if role.role == SaddleRole::CycleClosing {
@@ -401,7 +409,8 @@ impl Sweep {
             root_into.fill(0);
             for (i, &r) in roots.iter().enumerate() {
                 let r_into = &into[i * w..(i + 1) * w];
-                let (keep, lose) = if above(f, top[r as usize], top[root as usize]) {
+                // Every component already swept lies above v, so v joins the first.
+                let (keep, lose) = if root == v || above(f, top[r as usize], top[root as usize]) {
                     (r, root)
                 } else {
                     (root, r)
