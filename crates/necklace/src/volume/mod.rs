@@ -580,7 +580,7 @@ fn stuff_lattice(
         clock = Instant::now();
     };
     let grid = Grid::new(lo, hi, options.h, features)?;
-    let mut tree = build_octree(domain, &grid, features, options, values)?;
+    let tree = build_octree(domain, &grid, features, options, values)?;
     // A tree that fitted is the last one built, unless its stuffing is over the
     // budget (rare): the earlier trees' values go.
     *values = CentreValues::default();
@@ -594,8 +594,21 @@ fn stuff_lattice(
     let values = lattice_values(domain, &grid, &tree, &background.keys, &positions);
     // The centre values have served (the dead cells, the lattice's signs): their table,
     // as large as the tree's, is not held through the stuffing, on thin models the
-    // volume stage's peak.
-    drop(std::mem::take(&mut tree.centre_values));
+    // volume stage's peak. What is kept of the tree cannot tell dead cells any more.
+    let Tree {
+        octree,
+        centre_values,
+        leaves,
+        estimated_tets,
+        truncations,
+    } = tree;
+    drop(centre_values);
+    let tree = Built {
+        octree,
+        leaves,
+        estimated_tets,
+        truncations,
+    };
     lap(2);
 
     // The paper's α on every edge.
@@ -642,7 +655,7 @@ fn stuff_lattice(
 /// What steps 1 to 3 made (see [`stuff_lattice`]).
 struct Lattice {
     grid: Grid,
-    tree: Tree,
+    tree: Built,
     keys: Vec<Key>,
     background_tets: usize,
     stuffed: stuffing::Stuffed,
@@ -754,6 +767,14 @@ struct Tree {
     leaves: usize,
     estimated_tets: usize,
     /// The tree stopped at each level (the last is the whole tree, before balance).
+    truncations: Vec<Truncation>,
+}
+
+/// A [`Tree`] once its centre values are dropped: its cells and counts.
+struct Built {
+    octree: Octree,
+    leaves: usize,
+    estimated_tets: usize,
     truncations: Vec<Truncation>,
 }
 
