@@ -276,16 +276,13 @@ impl Sweep {
             .collect();
         interior.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
         // What the sweep reads of each vertex beside its neighbours, in the sweep's
-        // order: read at the vertex's own place, every step waited on a cache miss.
-        let visits: Vec<(VertexType, f64)> = interior
-            .iter()
-            .map(|&(_, v)| {
-                (
-                    classification.classes[v as usize].kind,
-                    distance[v as usize],
-                )
-            })
-            .collect();
+        // order: read at the vertex's own place, every step waited on a cache miss. The
+        // unsmoothed distance takes the place of the key, no longer needed.
+        let mut kinds: Vec<VertexType> = Vec::with_capacity(interior.len());
+        for (key, v) in &mut interior {
+            *key = distance[*v as usize];
+            kinds.push(classification.classes[*v as usize].kind);
+        }
         let outer = (0..n as u32).filter(|&v| self.kinds[v as usize] == VertexKind::Outer);
 
         let mut forest = Forest::new(n, self.potential_words());
@@ -316,7 +313,7 @@ impl Sweep {
         let mut closers = Vec::new();
         let mut value = vec![0u64; w];
         let mut root_into = vec![0u64; w];
-        for (&(_, v), &(kind, d)) in interior.iter().zip(&visits) {
+        for (&(d, v), &kind) in interior.iter().zip(&kinds) {
             let vi = v as usize;
             added[vi] = true;
             top[vi] = v;
@@ -573,19 +570,22 @@ impl Ball {
         self.queue.clear();
         self.queue.push(first);
         self.reached[first as usize] = stamp;
+        // Upper neighbours not reached yet: the flood stops once it has them all.
+        let mut missing = upper.len() - 1;
         while let Some(u) = self.queue.pop() {
+            if missing == 0 {
+                break;
+            }
             for &w in around(u) {
                 let wi = w as usize;
                 if w != v && added[wi] && self.in_ball[wi] == stamp && self.reached[wi] != stamp {
                     self.reached[wi] = stamp;
                     self.queue.push(w);
+                    missing -= usize::from(upper.contains(&w));
                 }
             }
         }
-        upper
-            .iter()
-            .all(|&u| self.reached[u as usize] == stamp)
-            .then_some(&self.order[1..])
+        (missing == 0).then_some(&self.order[1..])
     }
 }
 
