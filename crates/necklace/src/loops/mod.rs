@@ -47,10 +47,12 @@
 //!
 //! Also here: [`classes`] (the edges a loop crosses, its Z2 class, the areas of its
 //! sides); [`LoopSurface`] (a surface's topology, homology basis and openings, built
-//! once); the result types [`NeckLoop`], [`DroppedLoop`] and [`DropReason`]; and
-//! [`transfer_loops`]: loops found on a simplified copy rebuilt on the input (the same
-//! plane or membrane, else the strip of faces under the copy's loop, else its best-fit
-//! plane), tightened and measured there, and kept only as the same neck (length within
+//! once); [`LoopMemo`] (what one search of a surface hands the next: the same loops,
+//! with the tightenings and empty planes they share done once); the result types
+//! [`NeckLoop`], [`DroppedLoop`] and [`DropReason`]; and [`transfer_loops`]: loops
+//! found on a simplified copy rebuilt on the input (the same plane or membrane, else
+//! the strip of faces under the copy's loop, else its best-fit plane), tightened and
+//! measured there, and kept only as the same neck (length within
 //! 5 %, centre within half a radius), else dropped as [`DropReason::NotTransferred`].
 //!
 //! Units are those of the surface. Every seed ends either as a loop or in `dropped` with
@@ -62,6 +64,7 @@ pub mod cut;
 pub mod lasso;
 pub mod linked;
 pub mod membrane;
+mod memo;
 pub mod opening;
 mod report;
 mod selection;
@@ -90,8 +93,9 @@ use crate::progress::{Progress, Silent};
 use cut::{closed_length, encloses_another, loop_around, plane_basis, Cutter, Plane};
 use membrane::membrane_loop;
 pub use membrane::{MembraneFailure, MembraneOptions};
+pub use memo::{LoopMemo, MAX_REMEMBERED_CROSSINGS};
 use opening::Openings;
-use tighten::{tighten, SurfaceGeometry};
+use tighten::SurfaceGeometry;
 pub use tighten::{SurfacePoint, TightenOptions, TightenStatus, Tightened};
 
 /// What the saddle of a seed does to the volume (see `morse::roles`).
@@ -138,6 +142,16 @@ pub struct Seed {
     /// membrane is tried, as a membrane's loop is not checked. Default false.
     #[serde(default)]
     pub disk_only: bool,
+}
+
+impl Seed {
+    /// The same seed with [`Seed::disk_only`] set.
+    pub fn needing_a_disk(self) -> Seed {
+        Seed {
+            disk_only: true,
+            ..self
+        }
+    }
 }
 
 /// Options of [`find_loops`].
@@ -274,24 +288,35 @@ pub fn find_loops(
     kind: Side,
     options: &LoopOptions,
 ) -> Result<LoopResult> {
-    find_loops_with_progress(surface, None, seeds, kind, options, &Silent)
+    find_loops_with_progress(
+        surface,
+        None,
+        seeds,
+        kind,
+        options,
+        &LoopMemo::default(),
+        &Silent,
+    )
 }
 
 /// [`find_loops`], reporting each seed cut and tightened to `progress`. `distance` is
 /// the surface's distance structure when the caller has one (the run's); without it,
-/// one is built when a seed first needs closest points.
+/// one is built when a seed first needs closest points. `memo` holds what earlier
+/// searches of `surface` with the same options found ([`LoopMemo`]: the same loops,
+/// with less work where the searches repeat each other).
 pub fn find_loops_with_progress(
     surface: &SurfaceMesh,
     distance: Option<&SurfaceDistance>,
     seeds: &[Seed],
     kind: Side,
     options: &LoopOptions,
+    memo: &LoopMemo,
     progress: &dyn Progress,
 ) -> Result<LoopResult> {
     check_inputs(surface, seeds, options)?;
 
     let start = Instant::now();
-    let prepared = LoopSurface::new(surface);
+    let prepared = memo.surface(surface);
     let basis = &prepared.basis;
     let geometry = prepared.geometry(surface);
     let measures = prepared.measures(surface, options);
@@ -319,12 +344,13 @@ pub fn find_loops_with_progress(
                     .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
                 c
             };
-            let outcome = loop_from_seed(&cutter, &geometry, &distance, seed, kind, options)
+            let outcome = loop_from_seed(&cutter, &geometry, &distance, memo, seed, kind, options)
                 .map(measured)
                 .map(|c| {
                     let separates = c.class.iter().all(|w| *w == 0);
                     if separates && seed.role == Some(Role::CycleClosing) {
-                        turned(&cutter, &geometry, &measures, seed, options).map_or(c, measured)
+                        turned(&cutter, &geometry, &measures, memo, seed, options)
+                            .map_or(c, measured)
                     } else {
                         c
                     }
@@ -360,7 +386,9 @@ pub fn find_loops_with_progress(
         .into_par_iter()
         .map(|(i, c)| {
             let c = if seeds[i].role == Some(Role::CycleClosing) {
-                narrowest(&cutter, &geometry, &measures, &seeds[i], kind, c, options)
+                narrowest(
+                    &cutter, &geometry, &measures, memo, &seeds[i], kind, c, options,
+                )
             } else {
                 c
             };
@@ -595,6 +623,7 @@ fn loop_from_seed(
     cutter: &Cutter,
     geometry: &SurfaceGeometry,
     distance: &LazyDistance<'_>,
+    memo: &LoopMemo,
     seed: &Seed,
     kind: Side,
     options: &LoopOptions,
@@ -611,7 +640,7 @@ fn loop_from_seed(
             &options.membrane,
         )
         .map(|m| {
-            let t = tighten(geometry, &m.crossings, &m.faces, &options.tighten);
+            let t = memo.tighten(geometry, &m.crossings, &m.faces, &options.tighten);
             tightened(t).map(|t| Start {
                 tightened: t,
                 offset: 0.0,
@@ -642,13 +671,13 @@ fn loop_from_seed(
     let mut failure = None;
     for offset in offsets {
         let point = add(seed.position, scale(n, offset));
-        let best = around_point(cutter, &normals, point, disk);
+        let best = around_point(cutter, memo, &normals, point, disk);
         if offset == 0.0 {
             (closed, open) = (best.1, best.2);
         }
         not_disks += best.3;
         if let Some((_, curve)) = best.0 {
-            let t = tighten(
+            let t = memo.tighten(
                 geometry,
                 &curve.crossings,
                 &curve.faces,
@@ -699,6 +728,7 @@ fn turned(
     cutter: &Cutter,
     geometry: &SurfaceGeometry,
     measures: &Measures,
+    memo: &LoopMemo,
     seed: &Seed,
     options: &LoopOptions,
 ) -> Option<Start> {
@@ -743,7 +773,7 @@ fn turned(
         .into_iter()
         .take(TRIED)
         .find_map(|(_, _, normal, curve)| {
-            let t = tighten(
+            let t = memo.tighten(
                 geometry,
                 &curve.crossings,
                 &curve.faces,
@@ -770,10 +800,12 @@ fn turned(
 /// surface, so it keeps the curve's class (a parallel plane 4 % of the diagonal away
 /// can cut round a whole part, a long curve that is most of the tightening's work). The
 /// winner alone is measured (opening, areas), once.
+#[allow(clippy::too_many_arguments)]
 fn narrowest(
     cutter: &Cutter,
     geometry: &SurfaceGeometry,
     measures: &Measures,
+    memo: &LoopMemo,
     seed: &Seed,
     kind: Side,
     c: Candidate,
@@ -795,13 +827,19 @@ fn narrowest(
         .par_iter()
         .map(|&offset| {
             let point = add(seed.position, scale(n, offset));
-            let (_, curve) =
-                around_point(cutter, &normals, point, seed.disk_only.then_some(kind)).0?;
+            let (_, curve) = around_point(
+                cutter,
+                memo,
+                &normals,
+                point,
+                seed.disk_only.then_some(kind),
+            )
+            .0?;
             let crossed = curve.crossings.iter().map(|x| x.edge as usize);
             if measures.basis.class_of_crossings(crossed) != c.class {
                 return None;
             }
-            let t = tighten(
+            let t = memo.tighten(
                 geometry,
                 &curve.crossings,
                 &curve.faces,
@@ -839,10 +877,14 @@ fn narrowest(
 /// counted in the last number.
 fn around_point(
     cutter: &Cutter,
+    memo: &LoopMemo,
     normals: &[[f64; 3]],
     point: [f64; 3],
     disk: Option<Side>,
 ) -> (Option<(f64, cut::CutCurve)>, usize, usize, usize) {
+    if let Some((closed, open)) = memo.no_curve_round(point, normals) {
+        return (None, closed, open, 0);
+    }
     let (surface, topology) = (cutter.mesh, cutter.topology);
     let mut best: Option<(f64, cut::CutCurve)> = None;
     let (mut closed, mut open, mut not_disks) = (0, 0, 0);
@@ -871,6 +913,9 @@ fn around_point(
                 best = Some((length, curve));
             }
         }
+    }
+    if best.is_none() && not_disks == 0 {
+        memo.remember_no_curve(point, normals, closed, open);
     }
     (best, closed, open, not_disks)
 }

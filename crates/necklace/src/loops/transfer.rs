@@ -22,7 +22,7 @@ use super::{
     around_point, centroid, cutting_normals, membrane_loop, neck_loop, tightened, tightening,
     Initial, LoopOptions, LoopResult, LoopSurface, Seed,
 };
-use super::{DropReason, DroppedLoop, NeckLoop};
+use super::{DropReason, DroppedLoop, LoopMemo, NeckLoop};
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, Result};
 use crate::geom::{add, norm, scale, sub};
@@ -120,6 +120,8 @@ pub fn transfer_loops(
     let geometry = to.geometry(surface);
     let measures = to.measures(surface, options);
     let cutter = to.cutter(surface);
+    // The input's planes (a memo serves one surface).
+    let memo = LoopMemo::default();
     let carried: Vec<std::result::Result<NeckLoop, DropReason>> = found
         .loops
         .par_iter()
@@ -131,9 +133,15 @@ pub fn transfer_loops(
                 let start = match (way, l.initial) {
                     (Way::Same, Initial::Plane) => {
                         let point = add(seed.position, scale(n, l.plane_offset));
-                        around_point(&cutter, &normals, point, seed.disk_only.then_some(l.kind))
-                            .0
-                            .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
+                        around_point(
+                            &cutter,
+                            &memo,
+                            &normals,
+                            point,
+                            seed.disk_only.then_some(l.kind),
+                        )
+                        .0
+                        .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
                     }
                     (Way::Same, Initial::Membrane) => membrane_loop(
                         surface,
@@ -153,6 +161,7 @@ pub fn transfer_loops(
                         .map(|(crossings, faces)| (crossings, faces, Vec::new())),
                     (Way::LoopPlane, _) => around_point(
                         &cutter,
+                        &memo,
                         &[l.normal],
                         l.center,
                         seed.disk_only.then_some(l.kind),

@@ -34,7 +34,8 @@
 //!    a cell or two thick give them no 2-saddle Hessian), each kept only where its plane
 //!    bounds a disk of its side and it adds a class (`loops::complete_classes`); where they
 //!    span more, the seeds cut again keeping only curves that bound disks
-//!    (`Seed::disk_only`);
+//!    (`Seed::disk_only`); these cuts share a `loops::LoopMemo`, so that what they
+//!    repeat of each other is done once;
 //! 6. the Morse and homology checks, and the side into the [`NeckReport`] (built side by
 //!    side, with per-stage timings, critical points ([`tracked_points`]) and, with
 //!    `keep_volume`, the volume field; its types, [`SideReport`] and [`TrackedPoint`] among
@@ -77,7 +78,7 @@ use std::time::Instant;
 
 use crate::distance::SurfaceDistance;
 use crate::error::{Error, ErrorKind, Result};
-use crate::loops::{self, LoopOptions, LoopResult, LoopSurface, NeckLoop, Role, Seed};
+use crate::loops::{self, LoopMemo, LoopOptions, LoopResult, LoopSurface, NeckLoop, Role, Seed};
 use crate::mesh::{Side, SurfaceMesh};
 use crate::morse::{self, MorseOptions, MorseResult, Saddle, SaddleRole, Schedule};
 use crate::progress::{Lane, Progress, Silent};
@@ -251,10 +252,7 @@ pub fn completion_seeds(result: &MorseResult) -> Vec<Seed> {
     result
         .completions
         .iter()
-        .map(|s| Seed {
-            disk_only: true,
-            ..seed_of(s, result.schedule)
-        })
+        .map(|s| seed_of(s, result.schedule).needing_a_disk())
         .collect()
 }
 
@@ -734,7 +732,7 @@ fn analyse_side(
             g,
             &mut warnings,
         )?,
-        None => (cutter.cut(&seeds)?, false),
+        None => (cutter.cut(&seeds, &LoopMemo::default())?, false),
     };
     let mut saddles = result.saddles.clone();
     if completed_with {
@@ -840,7 +838,8 @@ struct LoopCutter<'a> {
 }
 
 impl LoopCutter<'_> {
-    fn cut(&self, seeds: &[Seed]) -> Result<LoopResult> {
+    /// The loops of `seeds`; `memo` carries what the side's earlier cuts found.
+    fn cut(&self, seeds: &[Seed], memo: &LoopMemo) -> Result<LoopResult> {
         let (surface, options) = (self.surface, self.options);
         let found = loops::find_loops_with_progress(
             surface,
@@ -848,6 +847,7 @@ impl LoopCutter<'_> {
             seeds,
             self.side,
             options,
+            memo,
             self.progress,
         )?;
         // On a simplified copy: the same planes cut the input, and the loops are
@@ -872,6 +872,9 @@ impl LoopCutter<'_> {
 /// 2. More: some loop bounds no disk on this side (its plane's curve has another inside
 ///    it: a cross-section with holes). Every seed is cut again keeping only curves that
 ///    bound disks, and completed; taken, with a warning, when nearer the genus.
+///
+/// The cuts share a [`LoopMemo`]: the strict pass cuts the first pass's planes and
+/// tightens most of its curves again, only further where they shrink.
 fn loops_to_genus(
     cutter: &LoopCutter,
     seeds: &[Seed],
@@ -880,11 +883,13 @@ fn loops_to_genus(
     warnings: &mut Vec<String>,
 ) -> Result<(LoopResult, bool)> {
     let off_genus = |found: &LoopResult| loop_rank(&found.loops) as i64 - genus;
+    // The cuts below repeat each other's planes and tightenings.
+    let memo = LoopMemo::default();
     let completed = |seeds: &[Seed]| -> Result<(LoopResult, bool)> {
-        let mut found = cutter.cut(seeds)?;
+        let mut found = cutter.cut(seeds, &memo)?;
         let complete = off_genus(&found) < 0 && !completions.is_empty();
         if complete {
-            let extra = cutter.cut(completions)?;
+            let extra = cutter.cut(completions, &memo)?;
             loops::complete_classes(&mut found, extra, seeds.len());
         }
         Ok((found, complete))
@@ -894,13 +899,7 @@ fn loops_to_genus(
     if over <= 0 {
         return Ok(first);
     }
-    let strict: Vec<Seed> = seeds
-        .iter()
-        .map(|s| Seed {
-            disk_only: true,
-            ..*s
-        })
-        .collect();
+    let strict: Vec<Seed> = seeds.iter().map(|s| s.needing_a_disk()).collect();
     let again = completed(&strict)?;
     let d = off_genus(&again.0);
     if d.abs() >= over {

@@ -4,10 +4,10 @@
 use std::f64::consts::PI;
 
 use necklace::loops::cut::{closed_length, loop_around, plane_cut, Cutter, EdgeTree, Plane};
-use necklace::loops::tighten::{tighten, SurfaceGeometry, TightenStatus};
+use necklace::loops::tighten::{tighten, tighten_resumable, SurfaceGeometry, TightenStatus};
 use necklace::loops::{
-    find_loops, DropReason, Initial, LoopOptions, MembraneFailure, MembraneUse, NeckLoop, Role,
-    Seed, SurfacePoint, TightenOptions, Tightened,
+    find_loops, find_loops_with_progress, DropReason, Initial, LoopMemo, LoopOptions,
+    MembraneFailure, MembraneUse, NeckLoop, Role, Seed, SurfacePoint, TightenOptions, Tightened,
 };
 use necklace::mesh::{HomologyBasis, Topology};
 use necklace::morse::NormalSource;
@@ -148,6 +148,96 @@ fn tightening_a_tilted_loop_finds_the_narrowest_circle_of_a_surface_of_revolutio
         t.initial_length,
         &t,
     );
+}
+
+#[test]
+fn a_tightening_stopped_below_its_length_ratio_carries_on_to_what_a_fresh_one_gives() {
+    // A tilted circle round z = 0.61 slides down towards the waist and settles on a
+    // ring of the polygon about 0.7 of its start: it falls below 0.9 on the way.
+    let mesh = revolution(waist, 1.0, 101, 64);
+    let topology = Topology::new(&mesh);
+    let geometry = SurfaceGeometry::new(&mesh, &topology);
+    let tilt: f64 = 0.2;
+    let plane = Plane {
+        origin: [0.0, 0.0, 0.61],
+        normal: [0.0, tilt.sin(), tilt.cos()],
+    };
+    let curves = plane_cut(&mesh, &topology, &plane);
+    let c = &curves[loop_around(&mesh, &topology, &plane, &curves, plane.origin).unwrap()];
+    let with_ratio = |min_length_ratio| TightenOptions {
+        min_length_ratio,
+        ..TightenOptions::default()
+    };
+    let (stopped, state) = tighten_resumable(&geometry, &c.crossings, &c.faces, &with_ratio(0.9));
+    assert_eq!(stopped.status, TightenStatus::Collapsed);
+    assert!(stopped.length < 0.9 * stopped.initial_length);
+    assert_eq!(
+        stopped,
+        tighten(&geometry, &c.crossings, &c.faces, &with_ratio(0.9))
+    );
+    let state = state.expect("stopped by its ratio alone");
+    // Not under a ratio as large: a fresh run could stop earlier.
+    assert!(state.clone().resume(&geometry, &with_ratio(0.9)).is_none());
+    for ratio in [0.2, f64::MIN_POSITIVE] {
+        let (carried, more) = state.clone().resume(&geometry, &with_ratio(ratio)).unwrap();
+        let fresh = tighten(&geometry, &c.crossings, &c.faces, &with_ratio(ratio));
+        assert_eq!(carried, fresh);
+        assert!(more.is_none());
+        assert_eq!(fresh.status, TightenStatus::Converged);
+        assert!(fresh.rounds > stopped.rounds);
+        assert!(fresh.length < 0.9 * fresh.initial_length);
+    }
+    // A tightening that ends for a reason of its own gives no state.
+    let (done, none) = tighten_resumable(&geometry, &c.crossings, &c.faces, &with_ratio(0.2));
+    assert_eq!(done.status, TightenStatus::Converged);
+    assert!(none.is_none());
+}
+
+#[test]
+fn searches_that_share_a_memo_give_the_loops_of_fresh_searches() {
+    // The dumbbell's neck (a loop), a circle near a ball's pole (it slides off the cap:
+    // stopped at the length ratio, carried on where the seed needs a disk) and a point
+    // away from the surface (no curve goes round it).
+    let mesh = Shape::new(ShapeKind::Dumbbell).mesh().unwrap();
+    let x = |position: [f64; 3]| Seed {
+        position,
+        normal: [1.0, 0.0, 0.0],
+        persistence: 5,
+        ..Seed::default()
+    };
+    let seeds = [x([0.0, 0.0, 0.0]), x([1.2, 0.0, 0.0]), x([0.0, 0.0, 3.0])];
+    let strict: Vec<Seed> = seeds.iter().map(|s| s.needing_a_disk()).collect();
+    let options = LoopOptions::default();
+    let search = |seeds: &[Seed], memo: &LoopMemo| {
+        let r = find_loops_with_progress(
+            &mesh,
+            None,
+            seeds,
+            Side::Inside,
+            &options,
+            memo,
+            &necklace::progress::Silent,
+        )
+        .unwrap();
+        (r.loops, r.dropped)
+    };
+    let fresh = [
+        search(&seeds, &LoopMemo::default()),
+        search(&strict, &LoopMemo::default()),
+    ];
+    assert_eq!(fresh[0].0.len(), 1, "{:?}", fresh[0].1);
+    assert!((fresh[0].0[0].length - 2.0 * PI * 0.15).abs() < 0.02 * 2.0 * PI * 0.15);
+    assert!(fresh[1]
+        .1
+        .iter()
+        .any(|d| d.seed == 2 && matches!(d.reason, DropReason::NoLoopAroundSaddle { .. })));
+    let memo = LoopMemo::default();
+    assert_eq!(search(&seeds, &memo), fresh[0]);
+    assert_eq!(search(&strict, &memo), fresh[1]);
+    // And the other way round.
+    let memo = LoopMemo::default();
+    assert_eq!(search(&strict, &memo), fresh[1]);
+    assert_eq!(search(&seeds, &memo), fresh[0]);
 }
 
 /// The properties every tightened loop must have: closed polyline of surface points that

@@ -23,7 +23,9 @@
 //!
 //! Conventions: a strip is traversed forward; each portal has a *left* and a *right*
 //! vertex seen in that direction. Angles are in radians; lengths in mesh units.
-//! Entry point: [`tighten`]. Submodules, along the steps: `unfold` (step 1, and the
+//! Entry point: [`tighten`]; [`tighten_resumable`] also hands back a loop that stopped
+//! below its length ratio as a [`Tightening`], which [`Tightening::resume`] carries on
+//! under a smaller ratio to what a fresh run with that ratio gives. Submodules, along the steps: `unfold` (step 1, and the
 //! funnel of step 2), `path` (step 2), `strip` (step 3), `diagnostics` (the result).
 
 mod diagnostics;
@@ -238,11 +240,19 @@ pub fn tighten(
     faces: &[u32],
     options: &TightenOptions,
 ) -> Tightened {
-    let mut strip = Strip {
-        portals: crossings.iter().map(|c| c.edge).collect(),
-        faces: faces.to_vec(),
-        hint: crossings.iter().map(|c| c.t).collect(),
-    };
+    tighten_resumable(geometry, crossings, faces, options).0
+}
+
+/// [`tighten`], and where the loop stopped only because it fell below
+/// [`TightenOptions::min_length_ratio`] of its start, the tightening at that point, which
+/// [`Tightening::resume`] carries on under a smaller ratio (to the result a fresh
+/// [`tighten`] with that ratio gives, bit for bit).
+pub fn tighten_resumable(
+    geometry: &SurfaceGeometry,
+    crossings: &[Crossing],
+    faces: &[u32],
+    options: &TightenOptions,
+) -> (Tightened, Option<Tightening>) {
     let initial_points: Vec<[f64; 3]> = crossings
         .iter()
         .map(|c| {
@@ -251,113 +261,227 @@ pub fn tighten(
         })
         .collect();
     let initial_length = closed_length(&initial_points);
+    let tightening = Tightening {
+        strip: Strip {
+            portals: crossings.iter().map(|c| c.edge).collect(),
+            faces: faces.to_vec(),
+            hint: crossings.iter().map(|c| c.t).collect(),
+        },
+        path: None,
+        previous: None,
+        rounds: 0,
+        updates: 0,
+        decrease: f64::INFINITY,
+        initial_points,
+        initial_length,
+        first_crossings: crossings.len(),
+        below_ratio: None,
+    };
+    tightening.run(geometry, options, false)
+}
 
-    let mut rounds = 0;
-    let mut updates = 0;
-    let mut status = TightenStatus::NotConverged;
-    let mut path: Option<StripPath> = None;
-    let mut previous: Option<Strip> = None;
-    while rounds < options.max_rounds {
-        rounds += 1;
-        let Some(p) = shortest_closed_path(geometry, &mut strip) else {
-            status = TightenStatus::InvalidStrip;
-            break;
-        };
-        // Each update keeps the last path inside the strip, so the length cannot grow;
-        // should rounding ever make it, keep the last loop rather than a longer one.
-        if let (Some(last), Some(prev)) = (&path, &previous) {
-            if p.length > last.length * (1.0 + GROWTH_TOLERANCE) {
-                strip = prev.clone();
-                status = TightenStatus::Stalled;
+/// A tightening in progress: the strip, the last path in it and the counts. Held between
+/// [`tighten_resumable`] and [`Tightening::resume`] when the loop fell below the length
+/// ratio asked for, at the point of that test.
+#[derive(Debug, Clone)]
+pub struct Tightening {
+    strip: Strip,
+    path: Option<StripPath>,
+    /// The strip before the last update (the last path lies in it).
+    previous: Option<Strip>,
+    rounds: usize,
+    updates: usize,
+    /// The length the last round took off.
+    decrease: f64,
+    initial_points: Vec<[f64; 3]>,
+    initial_length: f64,
+    first_crossings: usize,
+    /// The ratio the loop fell below, where it stopped for that.
+    below_ratio: Option<f64>,
+}
+
+impl Tightening {
+    /// Carry on a tightening that stopped below `min_length_ratio` of its start, under
+    /// `options` (which must differ from the first ones in that ratio alone). The result
+    /// is [`tighten`]'s with `options` where their ratio is below the one it stopped at;
+    /// `None` where it is not (a fresh run may stop earlier).
+    pub fn resume(
+        mut self,
+        geometry: &SurfaceGeometry,
+        options: &TightenOptions,
+    ) -> Option<(Tightened, Option<Tightening>)> {
+        let stopped_at = self.below_ratio.take()?;
+        (options.min_length_ratio < stopped_at).then(|| self.run(geometry, options, true))
+    }
+
+    /// The strip the number of portals grows past when it slides round the surface.
+    fn growth_limit(&self) -> usize {
+        MAX_STRIP_GROWTH * self.first_crossings + STRIP_GROWTH_SLACK
+    }
+
+    /// Rounds until the loop ends, from the round's start, or (resuming) from just after
+    /// the length ratio's test.
+    fn run(
+        mut self,
+        geometry: &SurfaceGeometry,
+        options: &TightenOptions,
+        mut resuming: bool,
+    ) -> (Tightened, Option<Tightening>) {
+        let mut status = TightenStatus::NotConverged;
+        loop {
+            if !resuming {
+                if self.rounds >= options.max_rounds {
+                    break;
+                }
+                match self.measure(geometry, options) {
+                    Measured::Continue => {}
+                    Measured::End(s) => {
+                        status = s;
+                        break;
+                    }
+                    Measured::BelowRatio => {
+                        self.below_ratio = Some(options.min_length_ratio);
+                        let result = self.result(geometry, TightenStatus::Collapsed);
+                        return (result, Some(self));
+                    }
+                }
+            }
+            resuming = false;
+            if let Some(s) = self.update(geometry, options) {
+                status = s;
                 break;
             }
         }
-        let decrease = path.as_ref().map_or(f64::INFINITY, |l| l.length - p.length);
+        (self.result(geometry, status), None)
+    }
+
+    /// The first half of a round: the shortest path in the strip and the tests on its
+    /// length.
+    fn measure(&mut self, geometry: &SurfaceGeometry, options: &TightenOptions) -> Measured {
+        self.rounds += 1;
+        let Some(p) = shortest_closed_path(geometry, &mut self.strip) else {
+            return Measured::End(TightenStatus::InvalidStrip);
+        };
+        // Each update keeps the last path inside the strip, so the length cannot grow;
+        // should rounding ever make it, keep the last loop rather than a longer one.
+        if let (Some(last), Some(prev)) = (&self.path, &self.previous) {
+            if p.length > last.length * (1.0 + GROWTH_TOLERANCE) {
+                self.strip = prev.clone();
+                return Measured::End(TightenStatus::Stalled);
+            }
+        }
+        self.decrease = self
+            .path
+            .as_ref()
+            .map_or(f64::INFINITY, |l| l.length - p.length);
         let length = p.length;
         let shrunk_to_vertex = p.crossings.iter().all(|c| c.vertex.is_some())
             && p.crossings
                 .iter()
                 .all(|c| c.vertex == p.crossings[0].vertex);
-        path = Some(p);
-        if shrunk_to_vertex || length < options.min_length_ratio * initial_length {
-            status = TightenStatus::Collapsed;
-            break;
+        self.path = Some(p);
+        if shrunk_to_vertex {
+            return Measured::End(TightenStatus::Collapsed);
         }
-        let p = path.as_ref().expect("set above");
-        let wanted = vertex_updates(geometry, &strip, p, options.angle_tolerance);
+        if length < options.min_length_ratio * self.initial_length {
+            return Measured::BelowRatio;
+        }
+        Measured::Continue
+    }
+
+    /// The second half of a round: the strip update where the path wants the other side
+    /// of a vertex; the status where the loop ends here.
+    fn update(
+        &mut self,
+        geometry: &SurfaceGeometry,
+        options: &TightenOptions,
+    ) -> Option<TightenStatus> {
+        let p = self.path.as_ref().expect("measured before the update");
+        let length = p.length;
+        let wanted = vertex_updates(geometry, &self.strip, p, options.angle_tolerance);
         if wanted.is_empty() {
-            status = TightenStatus::Converged;
-            break;
+            return Some(TightenStatus::Converged);
         }
         // The strip goes all the way around a vertex that the loop wants to pass on
         // its other side: the loop contracts over that vertex.
+        let strip = &self.strip;
         let n = strip.portals.len();
         if wanted
             .iter()
             .any(|r| strip.faces[(r.first + n - 1) % n] == strip.faces[(r.first + r.len - 1) % n])
         {
-            status = TightenStatus::Collapsed;
-            break;
+            return Some(TightenStatus::Collapsed);
         }
-        if decrease <= options.rel_tolerance * length {
-            status = TightenStatus::Stalled;
-            break;
+        if self.decrease <= options.rel_tolerance * length {
+            return Some(TightenStatus::Stalled);
         }
-        previous = Some(strip.clone());
-        match strip.apply(geometry, p, &wanted) {
-            Some(0) => {
-                status = TightenStatus::Stalled;
-                break;
-            }
-            Some(n) => updates += n,
+        self.previous = Some(self.strip.clone());
+        match self.strip.apply(geometry, p, &wanted) {
+            Some(0) => return Some(TightenStatus::Stalled),
+            Some(n) => self.updates += n,
             None => {
                 // Keep the strip the last path lies in.
-                if let Some(prev) = &previous {
-                    strip = prev.clone();
+                if let Some(prev) = &self.previous {
+                    self.strip = prev.clone();
                 }
-                status = TightenStatus::InvalidStrip;
-                break;
+                return Some(TightenStatus::InvalidStrip);
             }
         }
         // A strip that keeps growing is sliding around the surface, not settling. The
         // last path lies in the strip before this round's update: report on that one.
-        if strip.portals.len() > MAX_STRIP_GROWTH * crossings.len() + STRIP_GROWTH_SLACK {
-            if let Some(prev) = &previous {
-                strip = prev.clone();
+        if self.strip.portals.len() > self.growth_limit() {
+            if let Some(prev) = &self.previous {
+                self.strip = prev.clone();
             }
-            status = TightenStatus::NotConverged;
-            break;
+            return Some(TightenStatus::NotConverged);
         }
+        None
     }
 
-    // The path must lie in the strip reported on (one crossing per portal).
-    let path = path.filter(|p| p.crossings.len() == strip.portals.len());
-    if path.is_none() && status != TightenStatus::NotConverged {
-        status = TightenStatus::InvalidStrip;
-    }
-    let Some(path) = path else {
-        return Tightened {
-            surface_points: Vec::new(),
-            points: initial_points,
-            length: initial_length,
-            initial_length,
-            rounds,
-            updates,
-            status,
-            max_edge_turn: f64::NAN,
-            min_vertex_angle: f64::NAN,
-            simple: false,
+    /// The tightened loop as it stands, with `status`.
+    fn result(&self, geometry: &SurfaceGeometry, status: TightenStatus) -> Tightened {
+        // The path must lie in the strip reported on (one crossing per portal).
+        let path = self
+            .path
+            .as_ref()
+            .filter(|p| p.crossings.len() == self.strip.portals.len());
+        let status = if path.is_none() && status != TightenStatus::NotConverged {
+            TightenStatus::InvalidStrip
+        } else {
+            status
         };
-    };
-    finish(
-        geometry,
-        &strip,
-        &path,
-        initial_length,
-        rounds,
-        updates,
-        status,
-    )
+        let Some(path) = path else {
+            return Tightened {
+                surface_points: Vec::new(),
+                points: self.initial_points.clone(),
+                length: self.initial_length,
+                initial_length: self.initial_length,
+                rounds: self.rounds,
+                updates: self.updates,
+                status,
+                max_edge_turn: f64::NAN,
+                min_vertex_angle: f64::NAN,
+                simple: false,
+            };
+        };
+        finish(
+            geometry,
+            &self.strip,
+            path,
+            self.initial_length,
+            self.rounds,
+            self.updates,
+            status,
+        )
+    }
+}
+
+/// How the first half of a round ended.
+enum Measured {
+    Continue,
+    End(TightenStatus),
+    /// Shorter than the ratio asked for: collapsed, unless a smaller ratio carries on.
+    BelowRatio,
 }
 
 /// The loop's strip: `faces[i]` lies between `portals[i]` and `portals[i + 1]`.
