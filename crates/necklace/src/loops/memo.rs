@@ -13,9 +13,9 @@
 //! - for a point and the normals of its planes, that no closed curve of those planes goes
 //!   round it, with the curve counts of the first plane.
 //!
-//! The memo holds at most [`MAX_REMEMBERED_CROSSINGS`] crossings' worth of tightenings
-//! (a cache: past it, tightenings are no longer remembered and are done again where
-//! asked; no result depends on it).
+//! The memo holds at most [`MAX_REMEMBERED_BYTES`] of tightenings (a cache: past it,
+//! tightenings are no longer remembered and are done again where asked; no result
+//! depends on it).
 //!
 //! Entry point: [`LoopMemo`], passed to
 //! [`find_loops_with_progress`](super::find_loops_with_progress).
@@ -25,13 +25,12 @@ use std::sync::{Mutex, OnceLock};
 
 use super::cut::Crossing;
 use super::tighten::{tighten_resumable, SurfaceGeometry, Tightening};
-use super::{LoopSurface, TightenOptions, TightenStatus, Tightened};
+use super::{LoopSurface, SurfacePoint, TightenOptions, TightenStatus, Tightened};
 use crate::mesh::SurfaceMesh;
 
-/// Crossings (of the curves tightened, and of the results) past which no more
-/// tightenings are remembered: about 100 bytes each with a stopped tightening's state,
-/// so some 200 MB.
-pub const MAX_REMEMBERED_CROSSINGS: usize = 2_000_000;
+/// The bytes of remembered tightenings (curves, results and stopped states) past which
+/// no more are remembered.
+pub const MAX_REMEMBERED_BYTES: usize = 128 << 20;
 
 /// What loop searches on one surface with the same [`LoopOptions`](super::LoopOptions)
 /// hand each other (see the module's documentation). A memo serves one surface: every
@@ -46,7 +45,7 @@ pub struct LoopMemo {
 #[derive(Default)]
 struct Tightenings {
     by_curve: HashMap<Vec<u64>, Vec<Remembered>>,
-    crossings: usize,
+    bytes: usize,
 }
 
 /// A tightening as remembered: its result for `ratio`, and where the loop stopped
@@ -96,15 +95,18 @@ impl LoopMemo {
             None => tighten_resumable(geometry, crossings, faces, options),
         };
         debug_assert!(stopped.is_none() || result.status == TightenStatus::Collapsed);
+        let size = 8 * key.len()
+            + result.points.len() * size_of::<[f64; 3]>()
+            + result.surface_points.len() * size_of::<SurfacePoint>()
+            + stopped.as_ref().map_or(0, Tightening::bytes);
         let remembered = Remembered {
             ratio,
             result: result.clone(),
             stopped: stopped.map(Box::new),
         };
-        let size = crossings.len() + result.points.len();
         let mut memo = self.tightened.lock().expect("memo lock");
-        if memo.crossings + size <= MAX_REMEMBERED_CROSSINGS {
-            memo.crossings += size;
+        if memo.bytes + size <= MAX_REMEMBERED_BYTES {
+            memo.bytes += size;
             memo.by_curve.entry(key).or_default().push(remembered);
         }
         result

@@ -93,7 +93,7 @@ use crate::progress::{Progress, Silent};
 use cut::{closed_length, encloses_another, loop_around, plane_basis, Cutter, Plane};
 use membrane::membrane_loop;
 pub use membrane::{MembraneFailure, MembraneOptions};
-pub use memo::{LoopMemo, MAX_REMEMBERED_CROSSINGS};
+pub use memo::{LoopMemo, MAX_REMEMBERED_BYTES};
 use opening::Openings;
 use tighten::SurfaceGeometry;
 pub use tighten::{SurfacePoint, TightenOptions, TightenStatus, Tightened};

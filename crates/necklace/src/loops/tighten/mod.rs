@@ -314,6 +314,22 @@ impl Tightening {
         (options.min_length_ratio < stopped_at).then(|| self.run(geometry, options, true))
     }
 
+    /// The bytes it holds (its strips, path and start).
+    pub fn bytes(&self) -> usize {
+        let strip = |s: &Strip| {
+            s.portals.len() * size_of::<u32>()
+                + s.faces.len() * size_of::<u32>()
+                + s.hint.len() * size_of::<f64>()
+        };
+        strip(&self.strip)
+            + self.previous.as_ref().map_or(0, strip)
+            + self
+                .path
+                .as_ref()
+                .map_or(0, |p| p.crossings.len() * size_of::<PortalCrossing>())
+            + self.initial_points.len() * size_of::<[f64; 3]>()
+    }
+
     /// The strip the number of portals grows past when it slides round the surface.
     fn growth_limit(&self) -> usize {
         MAX_STRIP_GROWTH * self.first_crossings + STRIP_GROWTH_SLACK
