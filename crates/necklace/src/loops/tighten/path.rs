@@ -2,8 +2,9 @@
 //! [`shortest_closed_path`] reads as its three parts: choose the anchor portal
 //! ([`choose_anchor`]: where the last path crossed farthest from a vertex), find the
 //! anchor parameter that minimises the length (the length is convex in it: Newton steps
-//! on its slope from the last round's crossing, else a safeguarded regula falsi,
-//! `geom::illinois_root`), and turn the funnel path back into one crossing per portal
+//! on its slope from the last round's crossing, the funnel run again only where steps
+//! with its bends held settle, else a safeguarded regula falsi, `geom::illinois_root`),
+//! and turn the funnel path back into one crossing per portal
 //! ([`portal_crossings`]).
 //!
 //! Conventions: portal parameters run from the left vertex (0) to the right one (1) in
@@ -114,7 +115,7 @@ fn shortest_through(portals: &[Portal2], guess: Option<f64>) -> (f64, Vec<Apex>,
     let mut lo: (f64, Option<f64>) = (0.0, None);
     let mut hi: (f64, Option<f64>) = (1.0, None);
     if let Some(t) = guess.filter(|t| *t > 0.0 && *t < 1.0) {
-        if let Some(found) = newton(&eval, t, &mut lo, &mut hi) {
+        if let Some(found) = newton(&eval, (p0, pn), t, &mut lo, &mut hi) {
             return found;
         }
     }
@@ -163,9 +164,15 @@ fn shortest_through(portals: &[Portal2], guess: Option<f64>) -> (f64, Vec<Apex>,
 /// length. Every evaluation narrows the bracket `lo`, `hi` (a negative slope moves
 /// `lo`, a positive one `hi`). `None` where a step leaves that bracket (the minimum at
 /// an end, or a step past a change of the funnel's bends), the curvature is not
-/// positive, or [`NEWTON_STEPS`] steps do not settle.
+/// positive, or [`NEWTON_STEPS`] evaluations do not settle.
+///
+/// Between two runs of the funnel, the steps go on with the last path's bends held
+/// ([`held_slope`]: only its two end segments move with `t`), which is what the funnel
+/// would give again wherever the bends stay; the funnel runs once more where those
+/// steps settle, to confirm the bends or to go on from the new ones.
 fn newton(
     eval: &impl Fn(f64) -> (Vec<Apex>, f64, f64, f64),
+    ends: (Portal2, Portal2),
     mut t: f64,
     lo: &mut (f64, Option<f64>),
     hi: &mut (f64, Option<f64>),
@@ -183,16 +190,57 @@ fn newton(
         if curvature.is_nan() || curvature <= 0.0 {
             return None;
         }
-        let next = t - slope / curvature;
-        if (next - t).abs() <= SLOPE_BRACKET {
-            return Some((t, path, length));
+        let (mut u, mut slope, mut curvature) = (t, slope, curvature);
+        for _ in 0..HELD_STEPS {
+            let next = u - slope / curvature;
+            if (next - u).abs() <= SLOPE_BRACKET || !(next > lo.0 && next < hi.0) {
+                break;
+            }
+            u = next;
+            (slope, curvature) = held_slope(&path, ends, u);
+            if slope == 0.0 || curvature.is_nan() || curvature <= 0.0 {
+                break;
+            }
         }
-        if !(next > lo.0 && next < hi.0) {
-            return None;
+        if u == t {
+            // Settled (or left the bracket) from the evaluated parameter itself.
+            let next = t - slope / curvature;
+            return ((next - t).abs() <= SLOPE_BRACKET).then_some((t, path, length));
         }
-        t = next;
+        t = u;
     }
     None
+}
+
+/// Most Newton steps with a path's bends held between two runs of the funnel.
+const HELD_STEPS: usize = 16;
+
+/// The slope and curvature of the length at parameter `t` of the path through the bends
+/// of `path` (its two end segments moved to the anchor and its image at `t`): what
+/// [`length_and_slope`] reads of a path, its first and last bend apart from its ends.
+fn held_slope(path: &[Apex], (p0, pn): (Portal2, Portal2), t: f64) -> (f64, f64) {
+    let ds = [p0.right[0] - p0.left[0], p0.right[1] - p0.left[1]];
+    let dg = [pn.right[0] - pn.left[0], pn.right[1] - pn.left[1]];
+    let end = |pos| Apex {
+        pos,
+        vertex: None,
+        index: 0,
+    };
+    let (s, g) = (path[0].pos, path[path.len() - 1].pos);
+    let mut inner = path[1..path.len() - 1]
+        .iter()
+        .filter(|a| a.pos != s && a.pos != g);
+    let mut moved = Vec::with_capacity(4);
+    moved.push(end(lerp2(p0.left, p0.right, t)));
+    if let Some(&first) = inner.next() {
+        moved.push(first);
+        if let Some(&last) = inner.next_back() {
+            moved.push(last);
+        }
+    }
+    moved.push(end(lerp2(pn.left, pn.right, t)));
+    let (_, slope, curvature) = length_and_slope(&moved, ds, dg);
+    (slope, curvature)
 }
 
 /// One crossing per strip portal (in strip order) of the funnel `path` through the
