@@ -25,8 +25,9 @@
 //! vertex seen in that direction. Angles are in radians; lengths in mesh units.
 //! Entry point: [`tighten`]; [`tighten_resumable`] also hands back a loop that stopped
 //! below its length ratio as a [`Tightening`], which [`Tightening::resume`] carries on
-//! under a smaller ratio to what a fresh run with that ratio gives. Submodules, along the steps: `unfold` (step 1, and the
-//! funnel of step 2), `path` (step 2), `strip` (step 3), `diagnostics` (the result).
+//! under a smaller ratio to what a fresh run with that ratio gives. Submodules, along
+//! the steps: `unfold` (step 1, and the funnel of step 2), `path` (step 2), `strip`
+//! (step 3), `diagnostics` (the result).
 
 mod diagnostics;
 mod path;
