@@ -115,6 +115,7 @@ impl std::fmt::Display for MembraneFailure {
 pub fn membrane_loop(
     surface: &SurfaceMesh,
     topology: &Topology,
+    dual: &DualGraph,
     distance: &SurfaceDistance,
     saddle: [f64; 3],
     normal: [f64; 3],
@@ -129,14 +130,7 @@ pub fn membrane_loop(
     for &radius in &options.ring_radii {
         let (ring, landings) = ring_and_landings(distance, &axis, radius * d, d, options);
         let faces: Vec<u32> = landings.iter().map(|c| c.face).collect();
-        let cycle = match join(
-            surface,
-            topology,
-            distance,
-            &ring,
-            &faces,
-            options.max_settled,
-        ) {
+        let cycle = match join(dual, distance, &ring, &faces, options.max_settled) {
             Ok(cycle) => cycle,
             Err(f) => {
                 failure = f;
@@ -402,8 +396,7 @@ fn sheet_walk(
 /// the joining path went round the other side of a part, as on a knotted tube, whose
 /// tunnel bounds a Seifert surface but no disk.
 fn join(
-    surface: &SurfaceMesh,
-    topology: &Topology,
+    dual: &DualGraph,
     distance: &SurfaceDistance,
     sources: &[[f64; 3]],
     landing_faces: &[u32],
@@ -413,7 +406,7 @@ fn join(
         return Err(MembraneFailure::NotClosed);
     }
     let sees = |from: [f64; 3], f: u32| {
-        let dir = sub(centroid(surface, f), from);
+        let dir = sub(dual.centroids[f as usize], from);
         distance.ray_hit(from, dir, 0.8).is_none()
     };
     let mut cycle: Vec<u32> = Vec::new();
@@ -421,8 +414,7 @@ fn join(
     for i in 0..n {
         let j = (i + 1) % n;
         let (a, b) = (landing_faces[i], landing_faces[j]);
-        let path =
-            dual_path(surface, topology, a, b, max_settled).ok_or(MembraneFailure::NotClosed)?;
+        let path = dual_path(dual, a, b, max_settled).ok_or(MembraneFailure::NotClosed)?;
         if path.len() > 2
             && path[1..path.len() - 1]
                 .iter()
@@ -436,20 +428,56 @@ fn join(
     Ok(without_backtracking(cycle))
 }
 
-fn centroid(surface: &SurfaceMesh, f: u32) -> [f64; 3] {
-    let t = surface.triangles[f as usize].map(|v| surface.positions[v as usize]);
-    scale(add(add(t[0], t[1]), t[2]), 1.0 / 3.0)
+/// The graph the face-path searches (`dual_path`) run on: per face of a surface, its
+/// centroid and the faces across its manifold edges. Built once per surface
+/// ([`DualGraph::new`], `O(F)`): a search on a crossing model's meshed boundary settles
+/// tens of thousands of faces, each step reading its neighbours' centroids and
+/// neighbours (one table look-up each, not three corners and two edge tables).
+#[derive(Debug, Clone)]
+pub struct DualGraph {
+    /// Per face: the mean of its corners.
+    centroids: Vec<[f64; 3]>,
+    /// Per face: the face across each side (from corner `i` to `i + 1`), or
+    /// [`DualGraph::NONE`] where that edge is not manifold.
+    across: Vec<[u32; 3]>,
 }
 
-/// Faces adjacent to `f` across its manifold edges.
-fn neighbours(topology: &Topology, f: u32) -> impl Iterator<Item = u32> + '_ {
-    (0..3).filter_map(move |i| {
-        let e = topology.face_edge(f as usize, i)?;
-        match topology.edge_faces(e) {
-            [x, y] => Some(if *x == f { *y } else { *x }),
-            _ => None,
-        }
-    })
+impl DualGraph {
+    /// No face across a side.
+    const NONE: u32 = u32::MAX;
+
+    /// The dual graph of `surface`, whose topology is `topology`.
+    pub fn new(surface: &SurfaceMesh, topology: &Topology) -> DualGraph {
+        let centroids = surface
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| surface.positions[v as usize]);
+                scale(add(add(a, b), c), 1.0 / 3.0)
+            })
+            .collect();
+        let across = (0..surface.triangles.len())
+            .map(|f| {
+                [0, 1, 2].map(|i| {
+                    topology
+                        .face_edge(f, i)
+                        .and_then(|e| match topology.edge_faces(e) {
+                            [x, y] => Some(if *x as usize == f { *y } else { *x }),
+                            _ => None,
+                        })
+                        .unwrap_or(DualGraph::NONE)
+                })
+            })
+            .collect();
+        DualGraph { centroids, across }
+    }
+
+    /// Faces adjacent to `f` across its manifold edges, in side order.
+    fn neighbours(&self, f: u32) -> impl Iterator<Item = u32> + '_ {
+        self.across[f as usize]
+            .into_iter()
+            .filter(|&g| g != DualGraph::NONE)
+    }
 }
 
 pub(super) fn shared_edge(topology: &Topology, f: u32, g: u32) -> Option<u32> {
@@ -467,24 +495,19 @@ pub(super) fn shared_edge(topology: &Topology, f: u32, g: u32) -> Option<u32> {
 /// per-thread [`Search`], reused across calls: a membrane's joins are many and mostly
 /// short, but on a crossing model's meshed boundary one in a hundred settles 40–90 k
 /// faces (a hash map there was most of the join's time).
-pub(super) fn dual_path(
-    surface: &SurfaceMesh,
-    topology: &Topology,
-    a: u32,
-    b: u32,
-    max_settled: usize,
-) -> Option<Vec<u32>> {
+pub(super) fn dual_path(dual: &DualGraph, a: u32, b: u32, max_settled: usize) -> Option<Vec<u32>> {
     if a == b {
         return Some(vec![a]);
     }
     SEARCH.with_borrow_mut(|search| {
-        search.start(surface.triangles.len());
-        let target = centroid(surface, b);
+        search.start(dual.centroids.len());
+        let centroid = |f: u32| dual.centroids[f as usize];
+        let target = centroid(b);
         let estimate = |c: [f64; 3]| norm(sub(target, c));
         // Non-negative floats order like their bit patterns.
         let mut heap = BinaryHeap::new();
         search.set(a, 0.0, a);
-        heap.push(Reverse((estimate(centroid(surface, a)).to_bits(), a)));
+        heap.push(Reverse((estimate(centroid(a)).to_bits(), a)));
         let mut settled = 0;
         while let Some(Reverse((_, f))) = heap.pop() {
             if f == b {
@@ -502,9 +525,9 @@ pub(super) fn dual_path(
                 return None;
             }
             let df = search.get(f)?.0;
-            let cf = centroid(surface, f);
-            for g in neighbours(topology, f) {
-                let cg = centroid(surface, g);
+            let cf = centroid(f);
+            for g in dual.neighbours(f) {
+                let cg = centroid(g);
                 let dg = df + norm(sub(cg, cf));
                 if search.get(g).is_none_or(|(old, _)| dg < old) {
                     search.set(g, dg, f);
@@ -652,6 +675,48 @@ mod tests {
         assert_eq!(without_backtracking(vec![1, 2, 2, 3]), vec![1, 2, 3]);
         assert_eq!(without_backtracking(vec![5, 1, 2, 3, 1]), vec![1, 2, 3]);
         assert_eq!(without_backtracking(vec![1, 2, 3, 4, 1]), vec![1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn face_paths_on_the_icosahedron_follow_its_dual_dodecahedron() {
+        let (corners, faces) = crate::geom::icosahedron();
+        let surface = SurfaceMesh::new(corners.to_vec(), faces.to_vec()).unwrap();
+        let topology = Topology::new(&surface);
+        let dual = DualGraph::new(&surface, &topology);
+        for f in 0..20u32 {
+            let around: Vec<u32> = dual.neighbours(f).collect();
+            // Every face has three neighbours, each of which has it back, and its
+            // centroid is the mean of its corners.
+            assert_eq!(around.len(), 3);
+            assert!(around.iter().all(|&g| dual.neighbours(g).any(|h| h == f)));
+            let mean = scale(
+                faces[f as usize]
+                    .iter()
+                    .fold([0.0; 3], |m, &v| add(m, corners[v as usize])),
+                1.0 / 3.0,
+            );
+            assert!(norm(sub(mean, dual.centroids[f as usize])) < 1e-12);
+            // The dodecahedron's graph has diameter 5: a shortest path reaches every
+            // face in at most 5 steps, each between neighbours, and the opposite face
+            // (centroid through the centre) in exactly 5.
+            for g in 0..20u32 {
+                let path = dual_path(&dual, f, g, 100).unwrap();
+                assert_eq!((path[0], *path.last().unwrap()), (f, g));
+                assert!(path.len() <= 6);
+                assert!(path
+                    .windows(2)
+                    .all(|w| dual.neighbours(w[0]).any(|h| h == w[1])));
+                let (a, b) = (dual.centroids[f as usize], dual.centroids[g as usize]);
+                if norm(add(a, b)) < 1e-9 {
+                    assert_eq!(path.len(), 6);
+                }
+            }
+        }
+        // A search that may settle one face gives up on a face three steps away.
+        let far = (0..20u32)
+            .find(|&g| dual_path(&dual, 0, g, 100).unwrap().len() == 4)
+            .unwrap();
+        assert_eq!(dual_path(&dual, 0, far, 1), None);
     }
 
     #[test]

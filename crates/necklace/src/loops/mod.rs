@@ -91,7 +91,7 @@ use crate::geom::{add, norm, scale};
 use crate::mesh::{HomologyBasis, Side, SurfaceMesh, Topology};
 use crate::progress::{Progress, Silent};
 use cut::{closed_length, encloses_another, loop_around, plane_basis, Cutter, Plane};
-use membrane::membrane_loop;
+use membrane::{membrane_loop, DualGraph};
 pub use membrane::{MembraneFailure, MembraneOptions};
 pub use memo::{LoopMemo, MAX_REMEMBERED_BYTES};
 use opening::Openings;
@@ -344,17 +344,24 @@ pub fn find_loops_with_progress(
                     .then(|| c.tightened.length / (2.0 * std::f64::consts::PI * inscribed));
                 c
             };
-            let outcome = loop_from_seed(&cutter, &geometry, &distance, memo, seed, kind, options)
-                .map(measured)
-                .map(|c| {
-                    let separates = c.class.iter().all(|w| *w == 0);
-                    if separates && seed.role == Some(Role::CycleClosing) {
-                        turned(&cutter, &geometry, &measures, memo, seed, options)
-                            .map_or(c, measured)
-                    } else {
-                        c
-                    }
-                });
+            let outcome = loop_from_seed(
+                (&cutter, &prepared.dual),
+                &geometry,
+                &distance,
+                memo,
+                seed,
+                kind,
+                options,
+            )
+            .map(measured)
+            .map(|c| {
+                let separates = c.class.iter().all(|w| *w == 0);
+                if separates && seed.role == Some(Role::CycleClosing) {
+                    turned(&cutter, &geometry, &measures, memo, seed, options).map_or(c, measured)
+                } else {
+                    c
+                }
+            });
             progress.advance(1);
             outcome
         })
@@ -620,7 +627,7 @@ impl LazyDistance<'_> {
 /// plane or the membrane gave it. Order: the plane through the saddle, then (where
 /// membranes are used) the membrane, then the parallel planes nearest first.
 fn loop_from_seed(
-    cutter: &Cutter,
+    (cutter, dual): (&Cutter, &DualGraph),
     geometry: &SurfaceGeometry,
     distance: &LazyDistance<'_>,
     memo: &LoopMemo,
@@ -634,6 +641,7 @@ fn loop_from_seed(
         membrane_loop(
             surface,
             topology,
+            dual,
             distance.get(),
             seed.position,
             n,

@@ -4,13 +4,14 @@
 //! ([`transfer_loops`](super::transfer_loops)).
 
 use super::cut::{Cutter, EdgeTree};
+use super::membrane::DualGraph;
 use super::opening::Openings;
 use super::tighten::SurfaceGeometry;
 use super::{LoopOptions, Measures};
 use crate::mesh::{HomologyBasis, SurfaceMesh, Topology};
 
 /// What the loop stage keeps of a surface between seeds: its topology, homology basis
-/// angle defects and edge tree. Built once per surface ([`LoopSurface::new`]); the pipeline
+/// angle defects, edge tree and dual graph. Built once per surface ([`LoopSurface::new`]); the pipeline
 /// builds one for the input surface when loops found on a simplified copy are carried
 /// back to it ([`transfer_loops`](super::transfer_loops)).
 /// It does not hold the surface: each use names it again, and must name the same one
@@ -23,6 +24,8 @@ pub struct LoopSurface {
     edges: EdgeTree,
     /// The total angle at each vertex ([`SurfaceGeometry::total_angles`]).
     angles: Vec<f64>,
+    /// Its faces' centroids and neighbours, for membranes' and carried loops' face paths.
+    pub(super) dual: DualGraph,
 }
 
 impl LoopSurface {
@@ -36,7 +39,9 @@ impl LoopSurface {
         let openings = Openings::new(surface, &topology, &geometry);
         let angles = geometry.total_angles().to_vec();
         let edges = EdgeTree::new(surface, &topology);
+        let dual = DualGraph::new(surface, &topology);
         LoopSurface {
+            dual,
             topology,
             basis,
             openings,

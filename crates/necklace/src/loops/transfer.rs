@@ -16,7 +16,7 @@
 use rayon::prelude::*;
 
 use super::cut::Crossing;
-use super::membrane::{dual_path, shared_edge, without_backtracking};
+use super::membrane::{dual_path, shared_edge, without_backtracking, DualGraph};
 use super::tighten::tighten;
 use super::{
     around_point, centroid, cutting_normals, membrane_loop, neck_loop, tightened, tightening,
@@ -51,8 +51,7 @@ enum Way {
 /// tightening takes an initial loop. `None` where two faces are not joined within the
 /// membrane's search limit or the strip closes on itself.
 fn traced(
-    surface: &SurfaceMesh,
-    topology: &Topology,
+    (topology, dual): (&Topology, &DualGraph),
     distance: &SurfaceDistance,
     points: &[[f64; 3]],
     options: &LoopOptions,
@@ -68,7 +67,7 @@ fn traced(
     let mut cycle = Vec::new();
     for (i, &f) in faces.iter().enumerate() {
         let g = faces[(i + 1) % faces.len()];
-        let path = dual_path(surface, topology, f, g, options.membrane.max_settled)?;
+        let path = dual_path(dual, f, g, options.membrane.max_settled)?;
         cycle.extend_from_slice(&path[..path.len() - 1]);
     }
     let cycle = without_backtracking(cycle);
@@ -146,6 +145,7 @@ pub fn transfer_loops(
                     (Way::Same, Initial::Membrane) => membrane_loop(
                         surface,
                         &to.topology,
+                        &to.dual,
                         distance,
                         seed.position,
                         n,
@@ -157,8 +157,10 @@ pub fn transfer_loops(
                     // the faces under the loop and its best-fit plane carry it over.
                     // A linked loop is made on the input, never carried.
                     (Way::Same, Initial::TurnedPlane | Initial::Linked) => None,
-                    (Way::Traced, _) => traced(surface, &to.topology, distance, &l.points, options)
-                        .map(|(crossings, faces)| (crossings, faces, Vec::new())),
+                    (Way::Traced, _) => {
+                        traced((&to.topology, &to.dual), distance, &l.points, options)
+                            .map(|(crossings, faces)| (crossings, faces, Vec::new()))
+                    }
                     (Way::LoopPlane, _) => around_point(
                         &cutter,
                         &memo,
