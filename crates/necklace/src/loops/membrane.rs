@@ -460,12 +460,8 @@ impl DualGraph {
             .map(|f| {
                 [0, 1, 2].map(|i| {
                     topology
-                        .face_edge(f, i)
-                        .and_then(|e| match topology.edge_faces(e) {
-                            [x, y] => Some(if *x as usize == f { *y } else { *x }),
-                            _ => None,
-                        })
-                        .unwrap_or(DualGraph::NONE)
+                        .across(f, i)
+                        .map_or(DualGraph::NONE, |(g, _)| g as u32)
                 })
             })
             .collect();

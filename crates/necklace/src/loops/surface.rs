@@ -10,10 +10,11 @@ use super::tighten::SurfaceGeometry;
 use super::{LoopOptions, Measures};
 use crate::mesh::{HomologyBasis, SurfaceMesh, Topology};
 
-/// What the loop stage keeps of a surface between seeds: its topology, homology basis
-/// angle defects, edge tree and dual graph. Built once per surface ([`LoopSurface::new`]); the pipeline
-/// builds one for the input surface when loops found on a simplified copy are carried
-/// back to it ([`transfer_loops`](super::transfer_loops)).
+/// What the loop stage keeps of a surface between seeds: its topology, homology basis,
+/// angle defects, edge tree and dual graph. Built once per surface
+/// ([`LoopSurface::new`]); the pipeline builds one for the input surface when loops
+/// found on a simplified copy are carried back to it
+/// ([`transfer_loops`](super::transfer_loops)).
 /// It does not hold the surface: each use names it again, and must name the same one
 /// ([`LoopSurface::is_of`]).
 pub struct LoopSurface {
