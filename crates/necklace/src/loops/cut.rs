@@ -74,8 +74,10 @@ pub fn closed_length(points: &[[f64; 3]]) -> f64 {
 /// open curves where the surface has a boundary or non-manifold edge. `O(V + F)`;
 /// [`Cutter::cut`] gives the same curves visiting only the edges near the plane.
 pub fn plane_cut(mesh: &SurfaceMesh, topology: &Topology, plane: &Plane) -> Vec<CutCurve> {
-    let all: Vec<u32> = (0..topology.num_edges() as u32).collect();
-    cut_edges(mesh, topology, plane, &all)
+    let crossed: Vec<u32> = (0..topology.num_edges() as u32)
+        .filter(|&e| crosses(mesh, topology, plane, e as usize))
+        .collect();
+    cut_edges(mesh, topology, plane, &crossed)
 }
 
 /// A surface with its edges in a bounding-box tree ([`EdgeTree`]), for plane cuts that
@@ -96,30 +98,31 @@ impl Cutter<'_> {
     pub fn cut(&self, plane: &Plane) -> Vec<CutCurve> {
         let mut near = Vec::new();
         self.tree.near_plane(plane, &mut near);
+        // Only the crossed ones need the order: sorting them alone sorts a fraction.
+        near.retain(|&e| crosses(self.mesh, self.topology, plane, e as usize));
         near.sort_unstable();
         cut_edges(self.mesh, self.topology, plane, &near)
     }
 }
 
-/// The curves where `plane` meets the surface, found from `candidates`: edge indices in
-/// increasing order, among them every edge the plane crosses. Each curve starts at its
-/// crossed edge of lowest index, so any such list gives the same curves.
+/// Whether `plane` crosses edge `e`: its ends lie on different sides (the module's side
+/// rule).
+fn crosses(mesh: &SurfaceMesh, topology: &Topology, plane: &Plane, e: usize) -> bool {
+    let positive = |v: u32| dot(plane.normal, sub(mesh.positions[v as usize], plane.origin)) >= 0.0;
+    let [a, b] = topology.edges()[e];
+    positive(a) != positive(b)
+}
+
+/// The curves where `plane` meets the surface, from `crossed`: the indices of the edges
+/// it crosses ([`crosses`]), in increasing order. Each curve starts at its crossed edge
+/// of lowest index.
 fn cut_edges(
     mesh: &SurfaceMesh,
     topology: &Topology,
     plane: &Plane,
-    candidates: &[u32],
+    crossed: &[u32],
 ) -> Vec<CutCurve> {
-    let positive = |v: u32| dot(plane.normal, sub(mesh.positions[v as usize], plane.origin)) >= 0.0;
-    let is_crossed = |e: usize| {
-        let [a, b] = topology.edges()[e];
-        positive(a) != positive(b)
-    };
-    let crossed: Vec<u32> = candidates
-        .iter()
-        .copied()
-        .filter(|&e| is_crossed(e as usize))
-        .collect();
+    let is_crossed = |e: usize| crosses(mesh, topology, plane, e);
     // The crossed edge of face `f` other than `e` (exactly one by the side rule).
     let other_crossed = |f: usize, e: usize| {
         (0..3)
@@ -145,13 +148,13 @@ fn cut_edges(
     };
 
     let mut visited = Visited {
-        crossed: &crossed,
+        crossed,
         seen: vec![false; crossed.len()],
     };
     let mut curves = Vec::new();
-    for &start in &crossed {
+    for (i, &start) in crossed.iter().enumerate() {
         let start = start as usize;
-        if visited.get(start) {
+        if visited.seen[i] {
             continue;
         }
         // Walk one way; if the walk hits an open edge, walk the other way from `start` too.
@@ -190,13 +193,10 @@ impl Visited<'_> {
             .expect("a walk follows crossed edges only")
     }
 
-    fn get(&self, e: usize) -> bool {
-        self.seen[self.slot(e)]
-    }
-
-    fn set(&mut self, e: usize) {
+    /// Marks edge `e` walked; whether it was not yet.
+    fn first_visit(&mut self, e: usize) -> bool {
         let i = self.slot(e);
-        self.seen[i] = true;
+        !std::mem::replace(&mut self.seen[i], true)
     }
 }
 
@@ -323,7 +323,7 @@ fn walk(
 ) -> (Vec<usize>, Vec<u32>, bool) {
     let mut edges = vec![start];
     let mut faces = Vec::new();
-    visited.set(start);
+    visited.first_visit(start);
     let start_faces = topology.edge_faces(start);
     if start_faces.len() != 2 || side >= start_faces.len() {
         return (edges, faces, false);
@@ -338,11 +338,10 @@ fn walk(
         if next == start {
             return (edges, faces, true);
         }
-        if visited.get(next) {
+        if !visited.first_visit(next) {
             // Only possible through a non-manifold fan; stop rather than loop forever.
             return (edges, faces, false);
         }
-        visited.set(next);
         edges.push(next);
         let ef = topology.edge_faces(next);
         if ef.len() != 2 {
