@@ -103,6 +103,166 @@ impl Cutter<'_> {
         near.sort_unstable();
         cut_edges(self.mesh, self.topology, plane, &near)
     }
+
+    /// The curves of [`Cutter::cut`] that may go round the plane's origin, in the same
+    /// order, with the same crossings: every curve that [`loop_around`] can pick for the
+    /// origin is among them (on a surface whose every edge lies in two faces; on others,
+    /// every curve).
+    ///
+    /// A curve round the origin crosses the line through it along the plane's second
+    /// basis vector `u` ([`plane_basis`]) on its positive side: one of its segments,
+    /// in a triangle, has ends on both sides of the line along `u`, and so one of that
+    /// triangle's two crossed edges has ends on both sides of the plane through the
+    /// line with normal `v`, or within rounding of it. Only the curves through such
+    /// edges, which the edge tree finds near the line, are walked.
+    pub fn cut_round(&self, plane: &Plane) -> Vec<CutCurve> {
+        if !self.tree.two_faces_per_edge {
+            return self.cut(plane);
+        }
+        let (mesh, topology) = (self.mesh, self.topology);
+        let (_, v) = plane_basis(plane.normal);
+        let margin = self.tree.rounding;
+        let across = |w: u32| dot(v, sub(mesh.positions[w as usize], plane.origin));
+        let mut near = Vec::new();
+        self.tree.near(plane, &[(v, 0.0, 0.0)], &mut near);
+        near.retain(|&e| {
+            let [a, b] = topology.edges()[e as usize];
+            let (ya, yb) = (across(a), across(b));
+            ya.min(yb) <= margin
+                && ya.max(yb) >= -margin
+                && crosses(mesh, topology, plane, e as usize)
+        });
+        match self.curves_through(plane, &near) {
+            Some(curves) => curves,
+            None => self.cut(plane),
+        }
+    }
+
+    /// Whether another closed curve of the plane lies inside `curve`, a closed curve of
+    /// it: [`encloses_another`] over the curves of [`Cutter::cut`]. A curve counts as
+    /// inside by its first point, which lies in `curve`'s bounding rectangle in the
+    /// plane if inside it: only the curves through edges near that rectangle are walked.
+    pub fn encloses_another_round(&self, plane: &Plane, curve: &CutCurve) -> bool {
+        let (mesh, topology) = (self.mesh, self.topology);
+        let (u, v) = plane_basis(plane.normal);
+        let project = projection(plane);
+        let poly = in_plane(mesh, topology, plane, curve);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &poly {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let mut near = Vec::new();
+        if self.tree.two_faces_per_edge {
+            self.tree
+                .near(plane, &[(u, lo[0], hi[0]), (v, lo[1], hi[1])], &mut near);
+            near.retain(|&e| crosses(mesh, topology, plane, e as usize));
+            near.sort_unstable();
+        }
+        let curves = self
+            .tree
+            .two_faces_per_edge
+            .then(|| self.curves_through(plane, &near))
+            .flatten()
+            .unwrap_or_else(|| self.cut(plane));
+        curves.iter().any(|c| {
+            c.closed
+                && c.crossings.first() != curve.crossings.first()
+                && c.points(mesh, topology)
+                    .first()
+                    .is_some_and(|&p| area_and_contains(&poly, project(p)).1)
+        })
+    }
+
+    /// The curves of [`Cutter::cut`] through the crossed edges `seeds` (in increasing
+    /// order), in its order; `None` where a walk does not close (only on surfaces
+    /// without [`EdgeTree::two_faces_per_edge`]).
+    fn curves_through(&self, plane: &Plane, seeds: &[u32]) -> Option<Vec<CutCurve>> {
+        let (mesh, topology) = (self.mesh, self.topology);
+        let is_crossed = |g: usize| crosses(mesh, topology, plane, g);
+        // Each curve through a seed, walked once, then from its edge of lowest index.
+        let mut walked: Vec<(Vec<usize>, Vec<u32>)> = Vec::new();
+        let mut seen = std::collections::HashSet::new();
+        for &seed in seeds {
+            let seed = seed as usize;
+            if seen.contains(&seed) {
+                continue;
+            }
+            let (edges, faces) = cycle(seed, topology, &is_crossed)?;
+            seen.extend(edges.iter().copied());
+            let (lowest, _) = edges.iter().enumerate().min_by_key(|&(_, &e)| e)?;
+            walked.push(from_edge(edges, faces, lowest, topology));
+        }
+        walked.sort_unstable_by_key(|(edges, _)| edges[0]);
+        let curves = walked
+            .into_iter()
+            .map(|(edges, faces)| CutCurve {
+                crossings: edges
+                    .into_iter()
+                    .map(|e| crossing(mesh, topology, plane, e))
+                    .collect(),
+                faces,
+                closed: true,
+            })
+            .collect();
+        Some(curves)
+    }
+}
+
+/// The closed curve of crossed edges through `start`, walked as [`cut_edges`] walks it
+/// (through `start`'s first face first): its edges and the faces between them. `None`
+/// where the walk does not come back to `start` (an open or non-manifold fan).
+fn cycle(
+    start: usize,
+    topology: &Topology,
+    is_crossed: &impl Fn(usize) -> bool,
+) -> Option<(Vec<usize>, Vec<u32>)> {
+    let mut edges = vec![start];
+    let mut faces = Vec::new();
+    let mut face = *topology.edge_faces(start).first()? as usize;
+    let mut edge = start;
+    loop {
+        let next = other_crossed(topology, face, edge, is_crossed)?;
+        faces.push(face as u32);
+        if next == start {
+            return Some((edges, faces));
+        }
+        if edges.len() > topology.num_edges() {
+            return None;
+        }
+        edges.push(next);
+        face = match *topology.edge_faces(next) {
+            [a, b] if a as usize == face => b,
+            [a, _] => a,
+            _ => return None,
+        } as usize;
+        edge = next;
+    }
+}
+
+/// The closed curve `edges` (with `faces[i]` between `edges[i]` and `edges[i + 1]`)
+/// started at `edges[at]` and walked through that edge's first face first, as
+/// [`cut_edges`] gives it when `edges[at]` is its crossed edge of lowest index.
+fn from_edge(
+    edges: Vec<usize>,
+    faces: Vec<u32>,
+    at: usize,
+    topology: &Topology,
+) -> (Vec<usize>, Vec<u32>) {
+    let n = edges.len();
+    let first_face = topology.edge_faces(edges[at])[0];
+    if faces[at] == first_face {
+        let edges = (0..n).map(|i| edges[(at + i) % n]).collect();
+        let faces = (0..n).map(|i| faces[(at + i) % n]).collect();
+        (edges, faces)
+    } else {
+        // Backwards: from `edges[at]` through the face before it.
+        let edges = (0..n).map(|i| edges[(at + n - i) % n]).collect();
+        let faces = (0..n).map(|i| faces[(at + 2 * n - 1 - i) % n]).collect();
+        (edges, faces)
+    }
 }
 
 /// Whether `plane` crosses edge `e`: its ends lie on different sides (the module's side
@@ -111,6 +271,37 @@ fn crosses(mesh: &SurfaceMesh, topology: &Topology, plane: &Plane, e: usize) -> 
     let positive = |v: u32| dot(plane.normal, sub(mesh.positions[v as usize], plane.origin)) >= 0.0;
     let [a, b] = topology.edges()[e];
     positive(a) != positive(b)
+}
+
+/// The crossed edge of face `f` other than `e` (exactly one by the side rule).
+fn other_crossed(
+    topology: &Topology,
+    f: usize,
+    e: usize,
+    is_crossed: impl Fn(usize) -> bool,
+) -> Option<usize> {
+    (0..3)
+        .filter_map(|i| topology.face_edge(f, i))
+        .find(|&g| g != e && is_crossed(g))
+}
+
+/// Where `plane` crosses edge `e`.
+fn crossing(mesh: &SurfaceMesh, topology: &Topology, plane: &Plane, e: usize) -> Crossing {
+    let [a, b] = topology.edges()[e];
+    let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+    let (da, db) = (
+        dot(plane.normal, sub(pa, plane.origin)),
+        dot(plane.normal, sub(pb, plane.origin)),
+    );
+    // t measured from a; for a vertex on the plane (d = 0, positive side) t is exactly 0 or 1.
+    let t = if da == 0.0 {
+        0.0
+    } else if db == 0.0 {
+        1.0
+    } else {
+        (da / (da - db)).clamp(0.0, 1.0)
+    };
+    Crossing { edge: e as u32, t }
 }
 
 /// The curves where `plane` meets the surface, from `crossed`: the indices of the edges
@@ -122,30 +313,9 @@ fn cut_edges(
     plane: &Plane,
     crossed: &[u32],
 ) -> Vec<CutCurve> {
-    let is_crossed = |e: usize| crosses(mesh, topology, plane, e);
-    // The crossed edge of face `f` other than `e` (exactly one by the side rule).
-    let other_crossed = |f: usize, e: usize| {
-        (0..3)
-            .filter_map(|i| topology.face_edge(f, i))
-            .find(|&g| g != e && is_crossed(g))
-    };
-    let make = |e: usize| {
-        let [a, b] = topology.edges()[e];
-        let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
-        let (da, db) = (
-            dot(plane.normal, sub(pa, plane.origin)),
-            dot(plane.normal, sub(pb, plane.origin)),
-        );
-        // t measured from a; for a vertex on the plane (d = 0, positive side) t is exactly 0 or 1.
-        let t = if da == 0.0 {
-            0.0
-        } else if db == 0.0 {
-            1.0
-        } else {
-            (da / (da - db)).clamp(0.0, 1.0)
-        };
-        Crossing { edge: e as u32, t }
-    };
+    let other_crossed =
+        |f: usize, e: usize| other_crossed(topology, f, e, |g| crosses(mesh, topology, plane, g));
+    let make = |e: usize| crossing(mesh, topology, plane, e);
 
     let mut visited = Visited {
         crossed,
@@ -210,6 +380,13 @@ pub struct EdgeTree {
     nodes: Vec<EdgeNode>,
     /// Edge indices, each leaf's a run of them.
     edges: Vec<u32>,
+    /// Whether every edge lies in two distinct faces and every face has three edges:
+    /// then a plane's crossed edges form disjoint closed curves ([`Cutter::cut_round`]).
+    two_faces_per_edge: bool,
+    /// A bound, far above it, on the rounding of a point's coordinates along a
+    /// direction as this module computes them: 1e-9 of the largest coordinate or
+    /// extent of the surface.
+    rounding: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -229,12 +406,23 @@ impl EdgeTree {
     /// The tree of `topology`'s edges on `mesh`.
     pub fn new(mesh: &SurfaceMesh, topology: &Topology) -> EdgeTree {
         let ends = topology.edges();
+        let two_faces_per_edge = (0..ends.len())
+            .all(|e| matches!(*topology.edge_faces(e), [f, g] if f != g))
+            && (0..topology.num_faces())
+                .all(|f| (0..3).all(|i| topology.face_edge(f, i).is_some()));
         let mut tree = EdgeTree {
             nodes: Vec::with_capacity(2 * ends.len() / LEAF_EDGES + 1),
             edges: (0..ends.len() as u32).collect(),
+            two_faces_per_edge,
+            rounding: 0.0,
         };
         if !ends.is_empty() {
             tree.build(mesh, ends, 0, ends.len());
+            let root = tree.nodes[0];
+            let largest = (0..3)
+                .map(|k| root.lo[k].abs().max(root.hi[k].abs()) + (root.hi[k] - root.lo[k]))
+                .fold(0.0, f64::max);
+            tree.rounding = 1e-9 * largest;
         }
         tree
     }
@@ -282,14 +470,19 @@ impl EdgeTree {
     /// Appends every edge whose box the plane may meet: a superset of the edges it
     /// crosses (the box test is widened by far more than the rounding of the side test).
     fn near_plane(&self, plane: &Plane, out: &mut Vec<u32>) {
+        self.near(plane, &[], out);
+    }
+
+    /// Appends every edge whose box the plane may meet within `ranges`: for each
+    /// `(w, lo, hi)`, where `w · (p − origin)` may lie in `[lo, hi]` for a point `p`
+    /// of the box (widened by twice [`EdgeTree::rounding`]).
+    fn near(&self, plane: &Plane, ranges: &[([f64; 3], f64, f64)], out: &mut Vec<u32>) {
         if self.nodes.is_empty() {
             return;
         }
-        let n = plane.normal;
-        let mut stack = vec![0usize];
-        while let Some(i) = stack.pop() {
-            let node = self.nodes[i];
-            // Signed distance of the box's centre, and the reach of its half extents.
+        // Signed distance of a box's centre along `n`, the reach of its half extents,
+        // and the size of both.
+        let reach = |node: &EdgeNode, n: [f64; 3]| {
             let (mut d, mut r, mut size) = (0.0, 0.0, 0.0);
             for (k, nk) in n.iter().enumerate() {
                 let c = 0.5 * (node.lo[k] + node.hi[k]) - plane.origin[k];
@@ -298,7 +491,20 @@ impl EdgeTree {
                 r += nk.abs() * e;
                 size += nk.abs() * (c.abs() + e);
             }
+            (d, r, size)
+        };
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            let node = self.nodes[i];
+            let (d, r, size) = reach(&node, plane.normal);
             if d.abs() > r + 1e-9 * size {
+                continue;
+            }
+            let margin = 2.0 * self.rounding;
+            if ranges.iter().any(|&(w, lo, hi)| {
+                let (d, r, _) = reach(&node, w);
+                d + r < lo - margin || d - r > hi + margin
+            }) {
                 continue;
             }
             if node.count > 0 {
@@ -352,6 +558,30 @@ fn walk(
     }
 }
 
+/// A point's coordinates in the plane: along the basis ([`plane_basis`]) from its origin.
+fn projection(plane: &Plane) -> impl Fn([f64; 3]) -> [f64; 2] + '_ {
+    let (u, v) = plane_basis(plane.normal);
+    move |p| {
+        let d = sub(p, plane.origin);
+        [dot(d, u), dot(d, v)]
+    }
+}
+
+/// A curve's points in plane coordinates ([`projection`]).
+fn in_plane(
+    mesh: &SurfaceMesh,
+    topology: &Topology,
+    plane: &Plane,
+    curve: &CutCurve,
+) -> Vec<[f64; 2]> {
+    let project = projection(plane);
+    curve
+        .points(mesh, topology)
+        .into_iter()
+        .map(project)
+        .collect()
+}
+
 /// Signed area and whether `point` is inside, for a closed polygon in plane coordinates.
 fn area_and_contains(poly: &[[f64; 2]], point: [f64; 2]) -> (f64, bool) {
     let n = poly.len();
@@ -381,16 +611,8 @@ pub fn encloses_another(
     curves: &[CutCurve],
     i: usize,
 ) -> bool {
-    let (u, v) = plane_basis(plane.normal);
-    let project = |p: [f64; 3]| {
-        let d = sub(p, plane.origin);
-        [dot(d, u), dot(d, v)]
-    };
-    let poly: Vec<[f64; 2]> = curves[i]
-        .points(mesh, topology)
-        .into_iter()
-        .map(project)
-        .collect();
+    let project = projection(plane);
+    let poly = in_plane(mesh, topology, plane, &curves[i]);
     curves.iter().enumerate().any(|(j, c)| {
         j != i
             && c.closed
@@ -413,15 +635,7 @@ pub fn region_side(
     curve: &CutCurve,
 ) -> Side {
     let (u, v) = plane_basis(plane.normal);
-    let project = |p: [f64; 3]| {
-        let d = sub(p, plane.origin);
-        [dot(d, u), dot(d, v)]
-    };
-    let poly: Vec<[f64; 2]> = curve
-        .points(mesh, topology)
-        .into_iter()
-        .map(project)
-        .collect();
+    let poly = in_plane(mesh, topology, plane, curve);
     let n = poly.len();
     let (mut area, mut outward) = (0.0, 0.0);
     for (k, &face) in curve.faces.iter().enumerate().take(n) {
@@ -455,22 +669,13 @@ pub fn loop_around(
     curves: &[CutCurve],
     point: [f64; 3],
 ) -> Option<usize> {
-    let (u, v) = plane_basis(plane.normal);
-    let project = |p: [f64; 3]| {
-        let d = sub(p, plane.origin);
-        [dot(d, u), dot(d, v)]
-    };
-    let target = project(point);
+    let target = projection(plane)(point);
     let mut best: Option<(usize, f64)> = None;
     for (i, curve) in curves.iter().enumerate() {
         if !curve.closed || curve.crossings.len() < 3 {
             continue;
         }
-        let poly: Vec<[f64; 2]> = curve
-            .points(mesh, topology)
-            .into_iter()
-            .map(project)
-            .collect();
+        let poly = in_plane(mesh, topology, plane, curve);
         let (area, inside) = area_and_contains(&poly, target);
         if inside && best.is_none_or(|(_, a)| area.abs() < a) {
             best = Some((i, area.abs()));

@@ -35,11 +35,14 @@ pub const MAX_REMEMBERED_BYTES: usize = 128 << 20;
 /// What loop searches on one surface with the same [`LoopOptions`](super::LoopOptions)
 /// hand each other (see the module's documentation). A memo serves one surface: every
 /// search given it must cut that surface.
+/// A plane's closed and open curve counts.
+pub(super) type CurveCounts = (usize, usize);
+
 #[derive(Default)]
 pub struct LoopMemo {
     surface: OnceLock<LoopSurface>,
     tightened: Mutex<Tightenings>,
-    no_curve: Mutex<HashMap<Vec<u64>, (usize, usize)>>,
+    no_curve: Mutex<HashMap<Vec<u64>, Option<CurveCounts>>>,
 }
 
 #[derive(Default)]
@@ -112,28 +115,31 @@ impl LoopMemo {
         result
     }
 
-    /// The first plane's closed and open curve counts, where an earlier search found no
-    /// closed curve round `point` in the planes through it with these `normals`.
+    /// Where an earlier search found no closed curve round `point` in the planes
+    /// through it with these `normals`: the first plane's closed and open curve counts,
+    /// if that search counted them.
     pub(super) fn no_curve_round(
         &self,
         point: [f64; 3],
         normals: &[[f64; 3]],
-    ) -> Option<(usize, usize)> {
+    ) -> Option<Option<CurveCounts>> {
         let memo = self.no_curve.lock().expect("memo lock");
         memo.get(&planes_key(point, normals)).copied()
     }
 
-    /// No closed curve of these planes goes round `point`; the first plane has `closed`
-    /// and `open` curves.
+    /// No closed curve of these planes goes round `point`; the first plane has
+    /// `counts` closed and open curves (`None`: not counted). Counts already known stay.
     pub(super) fn remember_no_curve(
         &self,
         point: [f64; 3],
         normals: &[[f64; 3]],
-        closed: usize,
-        open: usize,
+        counts: Option<CurveCounts>,
     ) {
         let mut memo = self.no_curve.lock().expect("memo lock");
-        memo.insert(planes_key(point, normals), (closed, open));
+        let known = memo.entry(planes_key(point, normals)).or_insert(counts);
+        if known.is_none() {
+            *known = counts;
+        }
     }
 }
 

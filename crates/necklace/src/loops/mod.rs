@@ -93,6 +93,7 @@ use crate::progress::{Progress, Silent};
 use cut::{closed_length, encloses_another, loop_around, plane_basis, Cutter, Plane};
 use membrane::{membrane_loop, DualGraph};
 pub use membrane::{MembraneFailure, MembraneOptions};
+use memo::CurveCounts;
 pub use memo::{LoopMemo, MAX_REMEMBERED_BYTES};
 use opening::Openings;
 use tighten::SurfaceGeometry;
@@ -675,15 +676,17 @@ fn loop_from_seed(
     let disk = seed.disk_only.then_some(kind);
     let offsets =
         std::iter::once(0.0).chain((1..=tried).flat_map(|j| [j as f64 * step, -(j as f64) * step]));
-    let (mut closed, mut open, mut not_disks) = (0, 0, 0);
+    let mut counts = None;
+    let mut not_disks = 0;
     let mut failure = None;
     for offset in offsets {
         let point = add(seed.position, scale(n, offset));
-        let best = around_point(cutter, memo, &normals, point, disk);
+        // The saddle's plane's curves are counted only for a seed that gets no loop.
+        let best = around_point(cutter, memo, &normals, point, disk, false);
         if offset == 0.0 {
-            (closed, open) = (best.1, best.2);
+            counts = best.1;
         }
-        not_disks += best.3;
+        not_disks += best.2;
         if let Some((_, curve)) = best.0 {
             let t = memo.tighten(
                 geometry,
@@ -706,6 +709,12 @@ fn loop_from_seed(
             }
         }
     }
+    let (closed, open) = counts.unwrap_or_else(|| {
+        let point = add(seed.position, scale(n, 0.0));
+        around_point(cutter, memo, &normals, point, disk, true)
+            .1
+            .unwrap_or_default()
+    });
     match failure {
         None if not_disks > 0 => Err(DropReason::NoDiskAroundSaddle {
             planes: not_disks,
@@ -841,6 +850,7 @@ fn narrowest(
                 &normals,
                 point,
                 seed.disk_only.then_some(kind),
+                false,
             )
             .0?;
             let crossed = curve.crossings.iter().map(|x| x.edge as usize);
@@ -878,39 +888,54 @@ fn narrowest(
 }
 
 /// The shortest closed curve around `point` over the planes through it with these
-/// normals, and the closed and open curve counts of the first plane. With `disk`
-/// ([`Seed::disk_only`]: the side the loop must bound a disk of), a curve with another
-/// one inside it, or whose region of the plane lies on the other side
-/// ([`cut::region_side`]: `point` was moved across the surface), is passed over, and
-/// counted in the last number.
+/// normals, the closed and open curve counts of the first plane when `counted` (or
+/// known), and the planes passed over for `disk`. With `disk` ([`Seed::disk_only`]: the
+/// side the loop must bound a disk of), a curve with another one inside it, or whose
+/// region of the plane lies on the other side ([`cut::region_side`]: `point` was moved
+/// across the surface), is passed over. Unless `counted`, only the curves that may go
+/// round `point` ([`Cutter::cut_round`]), and for `disk` those that may lie inside the
+/// one round it ([`Cutter::encloses_another_round`]), are walked: the same curve is
+/// found.
 fn around_point(
     cutter: &Cutter,
     memo: &LoopMemo,
     normals: &[[f64; 3]],
     point: [f64; 3],
     disk: Option<Side>,
-) -> (Option<(f64, cut::CutCurve)>, usize, usize, usize) {
-    if let Some((closed, open)) = memo.no_curve_round(point, normals) {
-        return (None, closed, open, 0);
+    counted: bool,
+) -> (Option<(f64, cut::CutCurve)>, Option<CurveCounts>, usize) {
+    match memo.no_curve_round(point, normals) {
+        Some(Some(counts)) => return (None, Some(counts), 0),
+        Some(None) if !counted => return (None, None, 0),
+        _ => {}
     }
     let (surface, topology) = (cutter.mesh, cutter.topology);
+    let only_round = !counted;
     let mut best: Option<(f64, cut::CutCurve)> = None;
-    let (mut closed, mut open, mut not_disks) = (0, 0, 0);
+    let mut counts = None;
+    let mut not_disks = 0;
     for (j, &normal) in normals.iter().enumerate() {
         let plane = Plane {
             origin: point,
             normal,
         };
-        let mut curves = cutter.cut(&plane);
-        if j == 0 {
-            closed = curves.iter().filter(|c| c.closed).count();
-            open = curves.len() - closed;
+        let mut curves = if only_round {
+            cutter.cut_round(&plane)
+        } else {
+            cutter.cut(&plane)
+        };
+        if j == 0 && !only_round {
+            let closed = curves.iter().filter(|c| c.closed).count();
+            counts = Some((closed, curves.len() - closed));
         }
         if let Some(i) = loop_around(surface, topology, &plane, &curves, point) {
             if let Some(side) = disk {
-                if encloses_another(surface, topology, &plane, &curves, i)
-                    || cut::region_side(surface, topology, &plane, &curves[i]) != side
-                {
+                let islands = if only_round {
+                    cutter.encloses_another_round(&plane, &curves[i])
+                } else {
+                    encloses_another(surface, topology, &plane, &curves, i)
+                };
+                if islands || cut::region_side(surface, topology, &plane, &curves[i]) != side {
                     not_disks += 1;
                     continue;
                 }
@@ -923,9 +948,9 @@ fn around_point(
         }
     }
     if best.is_none() && not_disks == 0 {
-        memo.remember_no_curve(point, normals, closed, open);
+        memo.remember_no_curve(point, normals, counts);
     }
-    (best, closed, open, not_disks)
+    (best, counts, not_disks)
 }
 
 /// The tightening options for a seed's loops: a seed that needs a disk

@@ -138,6 +138,7 @@ pub fn transfer_loops(
                             &normals,
                             point,
                             seed.disk_only.then_some(l.kind),
+                            false,
                         )
                         .0
                         .map(|(_, c)| (c.crossings, c.faces, Vec::new()))
@@ -167,6 +168,7 @@ pub fn transfer_loops(
                         &[l.normal],
                         l.center,
                         seed.disk_only.then_some(l.kind),
+                        false,
                     )
                     .0
                     .map(|(_, c)| (c.crossings, c.faces, Vec::new())),

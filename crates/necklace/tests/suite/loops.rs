@@ -3,7 +3,9 @@
 
 use std::f64::consts::PI;
 
-use necklace::loops::cut::{closed_length, loop_around, plane_cut, Cutter, EdgeTree, Plane};
+use necklace::loops::cut::{
+    closed_length, encloses_another, loop_around, plane_cut, Cutter, EdgeTree, Plane,
+};
 use necklace::loops::tighten::{tighten, tighten_resumable, SurfaceGeometry, TightenStatus};
 use necklace::loops::{
     find_loops, find_loops_with_progress, DropReason, Initial, LoopMemo, LoopOptions,
@@ -1143,17 +1145,11 @@ fn a_cut_through_the_edge_tree_gives_the_curves_of_the_whole_surface_cut() {
     // with the same crossings, also for planes through whole rings of vertices (the
     // revolution's rings lie exactly on z = ±k·h) and for planes that miss the surface.
     let golden = PI * (3.0 - 5f64.sqrt());
-    for mesh in [
+    let meshes = [
         revolution(waist, 1.0, 20, 16),
         Shape::new(ShapeKind::Pretzel).mesh().unwrap(),
-    ] {
-        let topology = Topology::new(&mesh);
-        let tree = EdgeTree::new(&mesh, &topology);
-        let cutter = Cutter {
-            mesh: &mesh,
-            topology: &topology,
-            tree: &tree,
-        };
+    ];
+    for_each_cutter(&meshes, |mesh, topology, cutter| {
         let (lo, hi) = mesh.bounding_box().unwrap();
         let mut planes: Vec<Plane> = (0..=20)
             .map(|k| Plane {
@@ -1172,12 +1168,87 @@ fn a_cut_through_the_edge_tree_gives_the_curves_of_the_whole_surface_cut() {
         }));
         let mut crossed = 0;
         for plane in &planes {
-            let whole = plane_cut(&mesh, &topology, plane);
+            let whole = plane_cut(mesh, topology, plane);
             assert_eq!(cutter.cut(plane), whole, "{plane:?}");
             crossed += whole.len();
         }
         assert!(crossed >= 40, "{crossed} curves");
+    });
+}
+
+/// Calls `f` with each mesh, its topology and its cutter.
+fn for_each_cutter(meshes: &[SurfaceMesh], mut f: impl FnMut(&SurfaceMesh, &Topology, &Cutter)) {
+    for mesh in meshes {
+        let topology = Topology::new(mesh);
+        let tree = EdgeTree::new(mesh, &topology);
+        let cutter = Cutter {
+            mesh,
+            topology: &topology,
+            tree: &tree,
+        };
+        f(mesh, &topology, &cutter);
     }
+}
+
+#[test]
+fn a_cut_round_a_point_keeps_the_curves_that_may_go_round_it_and_the_one_that_does() {
+    // `Cutter::cut_round` walks only the curves near the line through the plane's
+    // origin: they must come out as `Cutter::cut` gives them, in its order, and the
+    // curve round the origin must be the one the whole cut has there; the islands found
+    // inside each curve looking near it only must be those of the whole cut. Planes through
+    // points on a grid over the box (in and out of the solid), with normals along the
+    // axes (the revolution's rings lie exactly on such planes) and spread over the
+    // sphere.
+    let golden = PI * (3.0 - 5f64.sqrt());
+    let mut normals: Vec<[f64; 3]> = vec![[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    normals.extend((0..9).map(|j| {
+        let z = (j as f64 + 0.5) / 9.0;
+        let (r, phi) = ((1.0 - z * z).sqrt(), golden * j as f64);
+        [r * phi.cos(), r * phi.sin(), z]
+    }));
+    let (mut fewer, mut round, mut islands) = (0, 0, 0);
+    let meshes = [
+        revolution(waist, 1.0, 20, 16),
+        Shape::new(ShapeKind::Pretzel).mesh().unwrap(),
+        Shape::new(ShapeKind::Torus).mesh().unwrap(),
+    ];
+    for_each_cutter(&meshes, |mesh, topology, cutter| {
+        let (lo, hi) = mesh.bounding_box().unwrap();
+        for i in 0..64 {
+            let f = [i % 4, (i / 4) % 4, i / 16].map(|k| (k as f64 + 0.5) / 4.0);
+            let origin = [0, 1, 2].map(|k| lo[k] + f[k] * (hi[k] - lo[k]));
+            for &normal in &normals {
+                let plane = Plane { origin, normal };
+                let all = cutter.cut(&plane);
+                let near = cutter.cut_round(&plane);
+                // In the whole cut's order: each of them is one of its curves, later
+                // than the one before.
+                let mut from = 0;
+                for curve in &near {
+                    let at = all[from..].iter().position(|c| c == curve);
+                    let at = at.unwrap_or_else(|| panic!("{plane:?}: a curve not in the cut"));
+                    from += at + 1;
+                }
+                fewer += usize::from(near.len() < all.len());
+                let pick = |curves: &[necklace::loops::cut::CutCurve]| {
+                    loop_around(mesh, topology, &plane, curves, origin).map(|i| curves[i].clone())
+                };
+                let whole = pick(&all);
+                assert_eq!(pick(&near), whole, "{plane:?}");
+                round += usize::from(whole.is_some());
+                // Islands inside a curve are found looking near it only.
+                for (i, curve) in all.iter().enumerate() {
+                    let inside = encloses_another(mesh, topology, &plane, &all, i);
+                    assert_eq!(cutter.encloses_another_round(&plane, curve), inside);
+                    islands += usize::from(inside);
+                }
+            }
+        }
+    });
+    assert!(
+        fewer >= 100 && round >= 100 && islands >= 20,
+        "{fewer} cuts with fewer curves, {round} round the origin, {islands} with islands"
+    );
 }
 
 #[test]
