@@ -10,7 +10,9 @@
 //! by [`Topology`]; a vertex on the plane gives exactly `t = 0` or `t = 1`.
 //!
 //! Entry points: [`plane_cut`] (or [`Cutter::cut`] with the surface's [`EdgeTree`]),
-//! [`loop_around`], [`encloses_another`], [`region_side`].
+//! [`loop_around`], [`encloses_another`], [`region_side`]; where only the curve round a
+//! point matters, [`Cutter::cut_round`] and [`Cutter::encloses_another_round`], which
+//! walk only the curves near it.
 
 pub use crate::geom::plane_basis;
 use crate::geom::{dot, lerp, norm, sub};
