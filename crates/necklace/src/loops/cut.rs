@@ -111,7 +111,7 @@ impl Cutter<'_> {
     /// origin is among them (on a surface whose every edge lies in two faces; on others,
     /// every curve).
     ///
-    /// A curve round the origin crosses the line through it along the plane's second
+    /// A curve round the origin crosses the line through it along the plane's first
     /// basis vector `u` ([`plane_basis`]) on its positive side: one of its segments,
     /// in a triangle, has ends on both sides of the line along `u`, and so one of that
     /// triangle's two crossed edges has ends on both sides of the plane through the
