@@ -32,12 +32,12 @@ use crate::mesh::SurfaceMesh;
 /// no more are remembered.
 pub const MAX_REMEMBERED_BYTES: usize = 128 << 20;
 
-/// What loop searches on one surface with the same [`LoopOptions`](super::LoopOptions)
-/// hand each other (see the module's documentation). A memo serves one surface: every
-/// search given it must cut that surface.
 /// A plane's closed and open curve counts.
 pub(super) type CurveCounts = (usize, usize);
 
+/// What loop searches on one surface with the same [`LoopOptions`](super::LoopOptions)
+/// hand each other (see the module's documentation). A memo serves one surface: every
+/// search given it must cut that surface.
 #[derive(Default)]
 pub struct LoopMemo {
     surface: OnceLock<LoopSurface>,
