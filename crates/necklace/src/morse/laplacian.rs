@@ -93,10 +93,10 @@ impl SparseMatrix {
 /// Each row's product with `x` of the compressed-row matrix `(row_start, cols, vals)`
 /// (any shape), stored into `y` by `store`. Rows run in parallel, each summed in its
 /// stored order, so the result does not depend on the thread count.
-pub(crate) fn row_products(
+pub(crate) fn row_products<V: Copy + Into<f64> + Sync>(
     row_start: &[usize],
     cols: &[u32],
-    vals: &[f64],
+    vals: &[V],
     x: &[f64],
     y: &mut [f64],
     store: impl Fn(&mut f64, f64) + Sync,
@@ -110,7 +110,7 @@ pub(crate) fn row_products(
                 let s: f64 = cols[range.clone()]
                     .iter()
                     .zip(&vals[range])
-                    .map(|(&c, &v)| v * x[c as usize])
+                    .map(|(&c, &v)| v.into() * x[c as usize])
                     .sum();
                 store(yi, s);
             }

@@ -27,6 +27,11 @@
 //! sweeps before and after the coarse correction: a symmetric positive definite
 //! preconditioner for CG. The finest level's matrix is the caller's (not copied).
 //!
+//! **Memory** (about 130 bytes an unknown on a million): the setup borrows the finest
+//! level's pattern and `L`, and reads its lumped `M` on the diagonal; the transfers are
+//! built in double precision and kept in single (`Transfer::rounded`); the finest
+//! level keeps only a scratch vector for the cycle.
+//!
 //! Every product runs rows in parallel, each row summed in a fixed order, and every dot
 //! product over fixed chunks: the result does not depend on the thread count.
 
@@ -55,16 +60,33 @@ const RADIUS_MARGIN: f64 = 1.1;
 /// (aggregation has stalled: the smoother alone does as well there).
 const MIN_COARSENING: f64 = 1.5;
 
-/// A rectangular sparse matrix in compressed rows (the transfers `P` and `Pᵀ`).
+/// A rectangular sparse matrix in compressed rows (the transfers `P` and `Pᵀ`). The
+/// setup builds them in double precision (the coarse operators are `Pᵀ X P` of
+/// those); the hierarchy keeps them in single precision ([`Transfer::rounded`]): a
+/// transfer only shapes the preconditioner, which stays symmetric (`Pᵀ` holds the
+/// same rounded values as `P`), and the finest level's two transfers are the
+/// hierarchy's largest arrays.
 #[derive(Debug, Clone)]
-struct Transfer {
+struct Transfer<V = f32> {
     columns: usize,
     row_start: Vec<usize>,
     cols: Vec<u32>,
-    vals: Vec<f64>,
+    vals: Vec<V>,
 }
 
-impl Transfer {
+impl Transfer<f64> {
+    /// The same matrix with its values rounded to single precision.
+    fn rounded(self) -> Transfer {
+        Transfer {
+            columns: self.columns,
+            row_start: self.row_start,
+            cols: self.cols,
+            vals: self.vals.iter().map(|&x| x as f32).collect(),
+        }
+    }
+}
+
+impl<V: Copy + Default + Into<f64> + Sync> Transfer<V> {
     fn rows(&self) -> usize {
         self.row_start.len() - 1
     }
@@ -84,7 +106,7 @@ impl Transfer {
     }
 
     /// The transpose, rows in increasing column order (deterministic).
-    fn transpose(&self) -> Transfer {
+    fn transpose(&self) -> Transfer<V> {
         let mut count = vec![0usize; self.columns + 1];
         for &c in &self.cols {
             count[c as usize + 1] += 1;
@@ -95,7 +117,7 @@ impl Transfer {
         let row_start = count.clone();
         let mut next = count;
         let mut cols = vec![0u32; self.cols.len()];
-        let mut vals = vec![0.0; self.vals.len()];
+        let mut vals = vec![V::default(); self.vals.len()];
         for i in 0..self.rows() {
             for k in self.row_start[i]..self.row_start[i + 1] {
                 let c = self.cols[k] as usize;
@@ -113,8 +135,41 @@ impl Transfer {
     }
 }
 
-/// A level's operator pair on one pattern: `L` and `M` values, and `M + τL` for the
-/// current `τ`.
+/// A level's `L` and `M` on one pattern, borrowed: the finest level's from the
+/// caller's reduced system (its lumped mass on the diagonal, so that the setup copies
+/// none of the run's largest matrix), a coarse level's from its [`Operator`].
+#[derive(Clone, Copy)]
+struct Pair<'a> {
+    n: usize,
+    row_start: &'a [usize],
+    cols: &'a [u32],
+    stiffness: &'a [f64],
+    mass: Mass<'a>,
+    diagonal_index: &'a [usize],
+}
+
+/// The mass of a [`Pair`].
+#[derive(Clone, Copy)]
+enum Mass<'a> {
+    /// One value per row, on the diagonal (the finest level's lumped mass).
+    Lumped(&'a [f64]),
+    /// One value per entry of the pattern (a coarse level's `Pᵀ M P`).
+    Entries(&'a [f64]),
+}
+
+impl Pair<'_> {
+    /// The mass at entry `k`, of row `row`.
+    fn mass_at(&self, row: usize, k: usize) -> f64 {
+        match self.mass {
+            Mass::Lumped(mass) if k == self.diagonal_index[row] => mass[row],
+            Mass::Lumped(_) => 0.0,
+            Mass::Entries(mass) => mass[k],
+        }
+    }
+}
+
+/// A coarse level's operator pair on one pattern: `L` and `M` values, and `M + τL`
+/// for the current `τ`.
 #[derive(Debug, Clone)]
 struct Operator {
     /// Pattern, with `M + τL` as its values.
@@ -125,6 +180,17 @@ struct Operator {
 }
 
 impl Operator {
+    fn pair(&self) -> Pair<'_> {
+        Pair {
+            n: self.matrix.n,
+            row_start: &self.matrix.row_start,
+            cols: &self.matrix.cols,
+            stiffness: &self.stiffness,
+            mass: Mass::Entries(&self.mass),
+            diagonal_index: &self.diagonal_index,
+        }
+    }
+
     fn set_tau(&mut self, tau: f64) -> Vec<f64> {
         self.matrix.vals = self
             .mass
@@ -192,22 +258,15 @@ impl Hierarchy {
         diagonal_index: &[usize],
         mass: &[f64],
     ) -> Option<Hierarchy> {
-        let mut mass_values = vec![0.0; stiffness.len()];
-        for (i, &d) in diagonal_index.iter().enumerate() {
-            mass_values[d] = mass[i];
-        }
-        let fine = Operator {
-            matrix: SparseMatrix {
-                n: pattern.n,
-                row_start: pattern.row_start.clone(),
-                cols: pattern.cols.clone(),
-                vals: Vec::new(),
-            },
-            stiffness: stiffness.to_vec(),
-            mass: mass_values,
-            diagonal_index: diagonal_index.to_vec(),
+        let fine = Pair {
+            n: pattern.n,
+            row_start: &pattern.row_start,
+            cols: &pattern.cols,
+            stiffness,
+            mass: Mass::Lumped(mass),
+            diagonal_index,
         };
-        let (fine_stiffness, fine_mass) = spectral_radii(&fine);
+        let (fine_stiffness, fine_mass) = spectral_radii(fine);
         let fine_weight = smoothing_weight(fine_stiffness, fine_mass);
         let mut info = HierarchyInfo {
             sizes: vec![pattern.n],
@@ -219,15 +278,15 @@ impl Hierarchy {
         // `ρ(D_L⁻¹ L)` of the level being coarsened.
         let mut stiffness_radius = fine_stiffness;
         while levels.len() + 1 < MAX_LEVELS {
-            let current = levels.last().map_or(&fine, |level| &level.operator);
-            if current.matrix.n <= COARSEST {
+            let current = levels.last().map_or(fine, |level| level.operator.pair());
+            if current.n <= COARSEST {
                 break;
             }
             let aggregates = aggregate(current);
             let count = aggregates.iter().filter(|&&a| a != u32::MAX).max();
             let Some(&count) = count else { break };
             let count = count as usize + 1;
-            if (count as f64) * MIN_COARSENING > current.matrix.n as f64 {
+            if (count as f64) * MIN_COARSENING > current.n as f64 {
                 break;
             }
             let prolong = smoothed_prolongator(current, &aggregates, count, stiffness_radius);
@@ -236,9 +295,12 @@ impl Hierarchy {
             info.sizes.push(coarse.matrix.n);
             info.entries.push(coarse.matrix.cols.len());
             info.transfer_entries.push(prolong.cols.len());
-            let (stiffness, mass) = spectral_radii(&coarse);
+            let (stiffness, mass) = spectral_radii(coarse.pair());
             stiffness_radius = stiffness;
-            transfers.push(Transfers { prolong, restrict });
+            transfers.push(Transfers {
+                prolong: prolong.rounded(),
+                restrict: restrict.rounded(),
+            });
             levels.push(Level {
                 operator: coarse,
                 inverse_diagonal: Vec::new(),
@@ -290,9 +352,13 @@ impl Hierarchy {
         work: &mut Workspace,
     ) {
         if work.levels.len() != self.levels.len() + 1 {
-            work.levels = std::iter::once(fine.n)
-                .chain(self.levels.iter().map(|l| l.operator.matrix.n))
-                .map(|n| (vec![0.0; n], vec![0.0; n], vec![0.0; n]))
+            // The finest level's right-hand side and solution are the caller's: only
+            // its scratch vector is needed.
+            work.levels = std::iter::once((Vec::new(), Vec::new(), vec![0.0; fine.n]))
+                .chain(self.levels.iter().map(|l| {
+                    let n = l.operator.matrix.n;
+                    (vec![0.0; n], vec![0.0; n], vec![0.0; n])
+                }))
                 .collect();
         }
         self.cycle(
@@ -410,10 +476,11 @@ fn jacobi_sweeps(
 }
 
 /// `ρ(D_L⁻¹ L)` and `ρ(D_M⁻¹ M)` of a level (estimates, see [`spectral_radius`]).
-fn spectral_radii(operator: &Operator) -> (f64, f64) {
-    let radius =
-        |values: &[f64]| spectral_radius(&operator.matrix, values, &operator.diagonal_index);
-    (radius(&operator.stiffness), radius(&operator.mass))
+fn spectral_radii(pair: Pair) -> (f64, f64) {
+    (
+        spectral_radius(pair, |_, k| pair.stiffness[k]),
+        spectral_radius(pair, |row, k| pair.mass_at(row, k)),
+    )
 }
 
 /// `4 / (3 ρ)` with `ρ` a bound of `ρ(D_A⁻¹ A)` for every `τ`: the larger of the two
@@ -423,13 +490,16 @@ fn smoothing_weight(stiffness_radius: f64, mass_radius: f64) -> f64 {
     4.0 / (3.0 * rho)
 }
 
-/// Power-iteration estimate of `ρ(D⁻¹ X)` for `X` (symmetric, `values` in `pattern`),
-/// through the similar `D^{-1/2} X D^{-1/2}`; rows with no positive diagonal count as 0.
-fn spectral_radius(pattern: &SparseMatrix, values: &[f64], diagonal_index: &[usize]) -> f64 {
-    let n = pattern.n;
-    let scale: Vec<f64> = diagonal_index
+/// Power-iteration estimate of `ρ(D⁻¹ X)` for `X` (symmetric, `value(row, k)` its entry
+/// `k` of `pair`'s pattern), through the similar `D^{-1/2} X D^{-1/2}`; rows with no
+/// positive diagonal count as 0.
+fn spectral_radius(pair: Pair, value: impl Fn(usize, usize) -> f64 + Sync) -> f64 {
+    let n = pair.n;
+    let scale: Vec<f64> = pair
+        .diagonal_index
         .iter()
-        .map(|&d| inverse(values[d]).sqrt())
+        .enumerate()
+        .map(|(i, &d)| inverse(value(i, d)).sqrt())
         .collect();
     if scale.iter().all(|&s| s == 0.0) {
         return 0.0;
@@ -447,11 +517,12 @@ fn spectral_radius(pattern: &SparseMatrix, values: &[f64], diagonal_index: &[usi
         }
         v.par_iter_mut().for_each(|x| *x /= norm);
         w.par_iter_mut().enumerate().for_each(|(i, wi)| {
-            let range = pattern.row_start[i]..pattern.row_start[i + 1];
-            let s: f64 = pattern.cols[range.clone()]
-                .iter()
-                .zip(&values[range])
-                .map(|(&c, &x)| x * scale[c as usize] * v[c as usize])
+            let range = pair.row_start[i]..pair.row_start[i + 1];
+            let s: f64 = range
+                .map(|k| {
+                    let c = pair.cols[k] as usize;
+                    value(i, k) * scale[c] * v[c]
+                })
                 .sum();
             *wi = scale[i] * s;
         });
@@ -463,9 +534,8 @@ fn spectral_radius(pattern: &SparseMatrix, values: &[f64], diagonal_index: &[usi
 
 /// Greedy aggregation of the level's unknowns along `L`'s graph (see the module doc).
 /// `u32::MAX` marks an unknown with no coupling at all (left to the smoother).
-fn aggregate(operator: &Operator) -> Vec<u32> {
-    let m = &operator.matrix;
-    let l = &operator.stiffness;
+fn aggregate(pair: Pair) -> Vec<u32> {
+    let (m, l) = (pair, pair.stiffness);
     let n = m.n;
     let neighbours = |i: usize| {
         let range = m.row_start[i]..m.row_start[i + 1];
@@ -517,19 +587,18 @@ fn aggregate(operator: &Operator) -> Vec<u32> {
 
 /// `P = (I − ω D_L⁻¹ L) T`, `T` the aggregates' indicator, `ω = 4 / (3 ρ(D_L⁻¹ L))`.
 fn smoothed_prolongator(
-    operator: &Operator,
+    pair: Pair,
     aggregates: &[u32],
     count: usize,
     stiffness_radius: f64,
-) -> Transfer {
-    let m = &operator.matrix;
-    let l = &operator.stiffness;
+) -> Transfer<f64> {
+    let (m, l) = (pair, pair.stiffness);
     let rho = stiffness_radius * RADIUS_MARGIN;
     let omega = if rho > 0.0 { 4.0 / (3.0 * rho) } else { 0.0 };
     let rows: Vec<Vec<(u32, f64)>> = (0..m.n)
         .into_par_iter()
         .map(|i| {
-            let factor = omega * inverse(l[operator.diagonal_index[i]]);
+            let factor = omega * inverse(l[pair.diagonal_index[i]]);
             let mut entries: Vec<(u32, f64)> = Vec::new();
             if aggregates[i] != u32::MAX {
                 entries.push((aggregates[i], 1.0));
@@ -583,8 +652,8 @@ fn flatten(rows: Vec<Vec<(u32, f64)>>) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
 
 /// The coarse pair `(Pᵀ L P, Pᵀ M P)` on one pattern: `(X P)` row by row, then
 /// `Pᵀ (X P)` row by row, each row accumulated densely in the order of its terms.
-fn galerkin(fine: &Operator, prolong: &Transfer, restrict: &Transfer) -> Operator {
-    let m = &fine.matrix;
+fn galerkin(fine: Pair, prolong: &Transfer<f64>, restrict: &Transfer<f64>) -> Operator {
+    let m = fine;
     let coarse_n = prolong.columns;
     // Y = X P for both values (n × coarse_n).
     let y_rows: Vec<Vec<(u32, f64, f64)>> = (0..m.n)
@@ -593,7 +662,7 @@ fn galerkin(fine: &Operator, prolong: &Transfer, restrict: &Transfer) -> Operato
             || Accumulator::new(coarse_n),
             |acc, i| {
                 for k in m.row_start[i]..m.row_start[i + 1] {
-                    let (xl, xm) = (fine.stiffness[k], fine.mass[k]);
+                    let (xl, xm) = (fine.stiffness[k], fine.mass_at(i, k));
                     let j = m.cols[k] as usize;
                     for q in prolong.row_start[j]..prolong.row_start[j + 1] {
                         let p = prolong.vals[q];
