@@ -440,10 +440,11 @@ pub struct MethodArgs {
     /// take: more is refused before any work.
     #[arg(long, default_value_t = necklace::morse::DEFAULT_MAX_STEPS, allow_negative_numbers = true)]
     pub max_steps: usize,
-    /// Preconditioner of the heat steps' conjugate gradients: `jacobi` (the diagonal) or
-    /// `multigrid` (a smoothed-aggregation V-cycle: fewer, dearer iterations); the
+    /// Preconditioner of the heat steps' conjugate gradients: `jacobi` (the diagonal),
+    /// `multigrid` (a smoothed-aggregation V-cycle: fewer, dearer iterations, more
+    /// memory), or `auto` (multigrid from 300 000 to 1 000 000 unknowns, jacobi outside); the
     /// fields agree to the solver's tolerance.
-    #[arg(long, value_enum, default_value_t = SolverArg::Jacobi)]
+    #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
     pub solver: SolverArg,
 }
 
@@ -483,6 +484,7 @@ pub enum OnlyArg {
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum SolverArg {
+    Auto,
     Jacobi,
     Multigrid,
 }
@@ -492,6 +494,7 @@ impl From<SolverArg> for Preconditioner {
         match s {
             SolverArg::Multigrid => Preconditioner::Multigrid,
             SolverArg::Jacobi => Preconditioner::Jacobi,
+            SolverArg::Auto => Preconditioner::Auto,
         }
     }
 }

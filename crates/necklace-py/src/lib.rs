@@ -112,6 +112,7 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
         options,
         "solver",
         &[
+            ("auto", Preconditioner::Auto),
             ("jacobi", Preconditioner::Jacobi),
             ("multigrid", Preconditioner::Multigrid),
         ],
@@ -491,6 +492,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         match options.morse.solver.preconditioner {
             Preconditioner::Multigrid => "multigrid",
             Preconditioner::Jacobi => "jacobi",
+            Preconditioner::Auto => "auto",
         },
     )?;
     out.set_item("plane_offsets", options.loops.plane_offsets)?;

@@ -401,7 +401,7 @@ def find_necks(
     h: Optional[float] = None,
     max_memory: int = 8_000_000_000,
     max_steps: int = 1000,
-    solver: str = "jacobi",
+    solver: str = "auto",
     plane_offsets: int = 16,
     slide_steps: int = 8,
     min_opening: float = 0.1,
@@ -440,8 +440,10 @@ def find_necks(
             estimated over it is refused before it is built.
         max_steps: the most heat steps a run may take.
         solver: preconditioner of the heat steps' conjugate gradients: ``"jacobi"``
-            (the diagonal) or ``"multigrid"`` (a smoothed-aggregation V-cycle: fewer,
-            dearer iterations); the fields agree to the solver's tolerance.
+            (the diagonal), ``"multigrid"`` (a smoothed-aggregation V-cycle: fewer,
+            dearer iterations, more memory), or ``"auto"`` (multigrid from 300 000
+            to 1 000 000 unknowns, jacobi outside); the fields agree to the solver's
+            tolerance.
         plane_offsets: parallel planes tried each way where the plane through a
             saddle has no curve around it (0.125 % of the diagonal apart).
         slide_steps: parallel planes (0.5 % of the diagonal apart) each way a

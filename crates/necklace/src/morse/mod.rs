@@ -108,7 +108,10 @@ pub use result::{
 };
 pub use roles::{Closer, CycleSearch, RoleAt, Roles, SaddleRole, Sweep};
 use selection::{barcode, select_at_last_step, select_over_scales};
-pub use smoothing::{implicit_step, HeatSolver, Preconditioner, SolverOptions, StepReport};
+pub use smoothing::{
+    implicit_step, HeatSolver, Preconditioner, SolverOptions, StepReport, MULTIGRID_MAX_UNKNOWNS,
+    MULTIGRID_MIN_UNKNOWNS,
+};
 pub use tracking::{CriticalPoint, StepEvents, Track, Tracker};
 
 /// Which heat times to classify at.
@@ -480,6 +483,11 @@ pub fn analyze_with_progress(
         f = level;
     }
     progress.finish();
+    // The solver (the reduced matrix, the stored solutions and any multigrid levels)
+    // is the analysis's largest structure, and the selection below, not the levels,
+    // can be a side's peak: only its figures are kept.
+    let (unknowns, tau, multigrid) = (solver.unknowns(), solver.tau(), solver.multigrid().cloned());
+    drop(solver);
 
     // 4. Select.
     let start = Instant::now();
@@ -518,11 +526,11 @@ pub fn analyze_with_progress(
 
     Ok(MorseResult {
         schedule: options.schedule,
-        unknowns: solver.unknowns(),
-        tau: solver.tau(),
+        unknowns,
+        tau,
         rescaled,
         solver: reports,
-        multigrid: solver.multigrid().cloned(),
+        multigrid,
         steps,
         saddles: selection.saddles,
         rejected: selection.rejected,

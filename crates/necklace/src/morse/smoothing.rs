@@ -4,8 +4,10 @@
 //! `(M + τL)_ff F'_f = M_f F_f − τ L_fd F_d`, assembled once ([`HeatSolver::new`]) and
 //! solved every step ([`HeatSolver::step`]) by conjugate gradients, warm-started from
 //! the current field, with one of two preconditioners ([`Preconditioner`]): the
-//! diagonal (Jacobi, the default), or a smoothed-aggregation multigrid V-cycle
-//! ([`multigrid`](super::multigrid), built once for all `τ`). The reduced matrix is symmetric positive definite (mass > 0 on every vertex
+//! diagonal (Jacobi), or a smoothed-aggregation multigrid V-cycle
+//! ([`multigrid`](super::multigrid), built once for all `τ`); by default the second
+//! from [`MULTIGRID_MIN_UNKNOWNS`] to [`MULTIGRID_MAX_UNKNOWNS`] unknowns, the first
+//! outside. The reduced matrix is symmetric positive definite (mass > 0 on every vertex
 //! of a tet). Matrix-vector products run rows in parallel; dot products sum fixed-size
 //! chunks in a fixed order, so the result does not depend on the thread count.
 
@@ -20,18 +22,43 @@ use super::multigrid::{Hierarchy, HierarchyInfo, Workspace};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Preconditioner {
-    /// The diagonal (default): one pass over the matrix per iteration. With the
-    /// projected warm start it needs 20–210 iterations per level on the shared models,
-    /// and its count grows little with the mesh, since the scale space's first `τ`
-    /// shrink with `h`.
+    /// Multigrid from [`MULTIGRID_MIN_UNKNOWNS`] to [`MULTIGRID_MAX_UNKNOWNS`] unknowns,
+    /// Jacobi outside (default). The two give the same field to the solve's tolerance;
+    /// which one ran is in the result ([`HeatSolver::multigrid`]).
     #[default]
+    Auto,
+    /// The diagonal: one pass over the matrix per iteration. With the projected warm
+    /// start it needs 20–210 iterations per level on the shared models, and its count
+    /// grows little with the mesh, since the scale space's first `τ` shrink with `h`.
     Jacobi,
     /// One smoothed-aggregation V-cycle per iteration ([`multigrid`](super::multigrid)):
-    /// 5–8× fewer iterations than Jacobi, each about 3.5× the cost, plus a setup. On this
-    /// project's 2-core machine it gains 8–15 % of the heat steps on the boot's inside
-    /// (450 k unknowns) and the paper schedule, and loses on the wire sphere, so it is
-    /// not the default (`docs/decisions.md`).
+    /// 5–8× fewer iterations than Jacobi, each about 4–5× the cost, plus a setup and
+    /// more memory. It loses on small meshes (os_cow's 82 k and 124 k unknowns,
+    /// tm_featuretype) and gains on meshes of several hundred thousand unknowns
+    /// (`docs/decisions.md`, Smoothing and solver).
     Multigrid,
+}
+
+/// The unknowns from which [`Preconditioner::Auto`] takes multigrid: below, its setup
+/// and dearer iterations cost more than its fewer iterations save.
+pub const MULTIGRID_MIN_UNKNOWNS: usize = 300_000;
+
+/// The unknowns from which [`Preconditioner::Auto`] keeps Jacobi again: the hierarchy
+/// takes about 130 bytes an unknown beside the side's analysis, and the largest real
+/// models (tm_cycloidal.ply's inside, 1.10 M unknowns) would pass 2 GB with it.
+pub const MULTIGRID_MAX_UNKNOWNS: usize = 1_000_000;
+
+impl Preconditioner {
+    /// Whether a solve of `unknowns` unknowns uses the multigrid V-cycle.
+    pub fn multigrid_for(self, unknowns: usize) -> bool {
+        match self {
+            Preconditioner::Auto => {
+                (MULTIGRID_MIN_UNKNOWNS..MULTIGRID_MAX_UNKNOWNS).contains(&unknowns)
+            }
+            Preconditioner::Jacobi => false,
+            Preconditioner::Multigrid => true,
+        }
+    }
 }
 
 /// Stopping rule and warm start of the conjugate-gradient solve.
@@ -45,7 +72,7 @@ pub struct SolverOptions {
     /// Morse stage's paper schedule takes three, as its first runs did, so that it
     /// reproduces them: the choice moves saddles near its persistence threshold).
     pub history: Option<usize>,
-    /// The preconditioner (default [`Preconditioner::Jacobi`]).
+    /// The preconditioner (default [`Preconditioner::Auto`]).
     pub preconditioner: Preconditioner,
 }
 
@@ -55,7 +82,7 @@ impl Default for SolverOptions {
             tolerance: 1e-10,
             max_iterations: 2000,
             history: None,
-            preconditioner: Preconditioner::Jacobi,
+            preconditioner: Preconditioner::Auto,
         }
     }
 }
@@ -183,7 +210,7 @@ impl HeatSolver {
             history: Vec::new(),
             multigrid: None,
         };
-        if options.preconditioner == Preconditioner::Multigrid {
+        if options.preconditioner.multigrid_for(n) {
             solver.multigrid = Hierarchy::new(
                 &solver.matrix,
                 &solver.stiffness_values,

@@ -805,6 +805,12 @@ fn analyse_side(
         side,
         volume: volume.report(),
         unknowns: result.unknowns,
+        preconditioner: if result.multigrid.is_some() {
+            morse::Preconditioner::Multigrid
+        } else {
+            morse::Preconditioner::Jacobi
+        },
+        iterations: result.solver.iter().map(|step| step.iterations).sum(),
         critical: tracked_points(&result),
         saddles,
         rejected: result.rejected,

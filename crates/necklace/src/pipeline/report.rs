@@ -103,6 +103,11 @@ pub struct SideReport {
     pub volume: VolumeReport,
     /// Interior vertices (unknowns of the heat system).
     pub unknowns: usize,
+    /// The preconditioner the heat steps' solves ran with: `jacobi` or `multigrid`
+    /// (what [`morse::Preconditioner::Auto`] chose for `unknowns`).
+    pub preconditioner: morse::Preconditioner,
+    /// Conjugate-gradient iterations over all heat steps.
+    pub iterations: usize,
     /// The selected 2-saddles (the loops' seeds, in this order), then, when their loops
     /// missed classes of the genus, the Morse stage's completions that were cut for
     /// them (`normal_from` other than the Hessian).

@@ -232,6 +232,22 @@ mod smoothing {
     }
 
     #[test]
+    fn the_default_preconditioner_is_multigrid_only_within_its_sizes() {
+        use necklace::morse::{MULTIGRID_MAX_UNKNOWNS, MULTIGRID_MIN_UNKNOWNS};
+        let m = torus_mesh();
+        let free = boundary(&m).iter().filter(|&&fixed| !fixed).count();
+        assert!(free < MULTIGRID_MIN_UNKNOWNS);
+        // Below the size the default solve is Jacobi's, to the bit.
+        let auto = scale_space(&m, SolverOptions::default(), 2.0);
+        assert_eq!(auto, scale_space(&m, with(Preconditioner::Jacobi), 2.0));
+        let rule = |unknowns| Preconditioner::Auto.multigrid_for(unknowns);
+        assert!(!rule(MULTIGRID_MIN_UNKNOWNS - 1) && rule(MULTIGRID_MIN_UNKNOWNS));
+        assert!(rule(MULTIGRID_MAX_UNKNOWNS - 1) && !rule(MULTIGRID_MAX_UNKNOWNS));
+        assert!(Preconditioner::Multigrid.multigrid_for(free));
+        assert!(!Preconditioner::Jacobi.multigrid_for(usize::MAX));
+    }
+
+    #[test]
     fn multigrid_does_not_depend_on_the_thread_count() {
         let m = torus_mesh();
         let run = |threads: usize| {
