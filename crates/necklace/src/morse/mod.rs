@@ -484,8 +484,8 @@ pub fn analyze_with_progress(
     }
     progress.finish();
     // The solver (the reduced matrix, the stored solutions and any multigrid levels)
-    // is the analysis's largest structure, and the selection below, not the levels,
-    // can be a side's peak: only its figures are kept.
+    // is the analysis's largest structure, and the selection below does not read it:
+    // only its figures are kept.
     let (unknowns, tau, multigrid) = (solver.unknowns(), solver.tau(), solver.multigrid().cloned());
     drop(solver);
 
