@@ -155,6 +155,21 @@ impl CycleSearch {
 /// The outer sphere's component has no maximum vertex.
 const OUTER: u32 = u32::MAX;
 
+/// How many vertices ahead in its order the sweep asks for a vertex's neighbours.
+const PREFETCH_AHEAD: usize = 8;
+
+/// Ask the processor to bring the cache line at `p` in (no effect on any result).
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is a hint: it reads nothing and faults on no address.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch(p.cast::<i8>(), std::arch::x86_64::_MM_HINT_T0);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
 impl Sweep {
     /// Build the vertex adjacency (the edges of the tets) and the cocycle basis.
     pub fn new(mesh: &TetMesh) -> Sweep {
@@ -276,12 +291,16 @@ impl Sweep {
             .collect();
         interior.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
         // What the sweep reads of each vertex beside its neighbours, in the sweep's
-        // order: read at the vertex's own place, every step waited on a cache miss. The
-        // unsmoothed distance takes the place of the key, no longer needed.
-        let mut kinds: Vec<VertexType> = Vec::with_capacity(interior.len());
+        // order (its class's kind and upper link components, and where its neighbours
+        // start, so that they can be asked for ahead): read at the vertex's own place,
+        // every step waited on a cache miss. The unsmoothed distance takes the place of
+        // the key, no longer needed.
+        let mut read: Vec<(VertexType, u32, usize)> = Vec::with_capacity(interior.len());
         for (key, v) in &mut interior {
-            *key = distance[*v as usize];
-            kinds.push(classification.classes[*v as usize].kind);
+            let vi = *v as usize;
+            *key = distance[vi];
+            let class = &classification.classes[vi];
+            read.push((class.kind, class.upper, self.start[vi]));
         }
         let outer = (0..n as u32).filter(|&v| self.kinds[v as usize] == VertexKind::Outer);
 
@@ -313,7 +332,10 @@ impl Sweep {
         let mut closers = Vec::new();
         let mut value = vec![0u64; w];
         let mut root_into = vec![0u64; w];
-        for (&(d, v), &kind) in interior.iter().zip(&kinds) {
+        for (i, (&(d, v), &(kind, upper_components, _))) in interior.iter().zip(&read).enumerate() {
+            if let Some(&(_, _, ahead)) = read.get(i + PREFETCH_AHEAD) {
+                prefetch(self.neighbours.as_ptr().wrapping_add(ahead));
+            }
             let vi = v as usize;
             added[vi] = true;
             top[vi] = v;
@@ -339,7 +361,7 @@ impl Sweep {
                 }
                 // Each upper link component beyond one per root can close a cycle; look
                 // for that many new classes among the ways down from one component.
-                let can_close = classification.classes[vi].upper as usize;
+                let can_close = upper_components as usize;
                 let mut open = can_close.saturating_sub(roots.len());
                 if w == 0 {
                     open = 0;
@@ -376,26 +398,25 @@ impl Sweep {
             if kind == VertexType::Saddle2 {
                 let mut role = self.role_of(v, f, distance, &roots, &top, &fattest);
                 role.essential = role.role == SaddleRole::CycleClosing && new_cycles > 0;
-                if role.role == SaddleRole::CycleClosing {
-                    if let Some(local) = ball.local_cycle(self, v, &added) {
-                        role = local
-                            .iter()
-                            .map(|&u| role_of_vertex[u as usize])
-                            .filter(|&i| i != u32::MAX)
-                            .map(|i| roles[i as usize])
-                            .find(|r: &RoleAt| r.role == SaddleRole::Separating)
-                            .map_or(
-                                RoleAt {
-                                    role: SaddleRole::LocalCycle,
-                                    ..role
-                                },
-                                |r| RoleAt {
-                                    vertex: v,
-                                    essential: false,
-                                    ..r
-                                },
-                            );
-                    }
+                if role.role == SaddleRole::CycleClosing && ball.local_cycle(self, v, &added) {
+                    role = ball
+                        .nearest(self, |u| {
+                            let i = role_of_vertex[u as usize];
+                            (i != u32::MAX)
+                                .then(|| roles[i as usize])
+                                .filter(|r: &RoleAt| r.role == SaddleRole::Separating)
+                        })
+                        .map_or(
+                            RoleAt {
+                                role: SaddleRole::LocalCycle,
+                                ..role
+                            },
+                            |r| RoleAt {
+                                vertex: v,
+                                essential: false,
+                                ..r
+                            },
+                        );
                 }
                 role_of_vertex[vi] = roles.len() as u32;
                 roles.push(role);
@@ -513,13 +534,28 @@ impl Sweep {
 }
 
 /// Scratch space for the local-cycle test, reused across saddles (stamped marks).
+///
+/// The ball is grown a layer at a time, only as far as the test needs: a flood that
+/// joins the upper neighbours within fewer hops joins them within [`LOCAL_HOPS`] (a
+/// larger ball holds every path of a smaller one), and the breadth-first order of the
+/// smaller ball is the start of the larger one's. Most lattice-noise cycles close within
+/// two hops, and a ball of three is several times the vertices of one of two.
 struct Ball {
     stamp: u32,
     in_ball: Vec<u32>,
+    /// Flood marks, stamped per flood (a ball may be flooded twice).
     reached: Vec<u32>,
+    flood_stamp: u32,
     order: Vec<u32>,
+    /// `order[head..]` is the last layer, not yet expanded; `hops` layers are in.
+    head: usize,
+    hops: usize,
     queue: Vec<u32>,
+    upper: Vec<u32>,
 }
+
+/// The ball's first radius, in edges (then [`LOCAL_HOPS`]).
+const FIRST_HOPS: usize = 2;
 
 impl Ball {
     fn new(n: usize) -> Ball {
@@ -527,65 +563,120 @@ impl Ball {
             stamp: 0,
             in_ball: vec![0; n],
             reached: vec![0; n],
+            flood_stamp: 0,
             order: Vec::new(),
+            head: 0,
+            hops: 0,
             queue: Vec::new(),
+            upper: Vec::new(),
         }
     }
 
-    /// If the superlevel set minus `v` joins all of `v`'s added neighbours within
-    /// [`LOCAL_HOPS`] edges of `v`: the ball's vertices in breadth-first order from `v`
-    /// (nearest first). Otherwise `None`: the cycle `v` closes leaves the ball.
-    fn local_cycle(&mut self, sweep: &Sweep, v: u32, added: &[bool]) -> Option<&[u32]> {
-        self.stamp += 1;
+    /// Add the next layer of the breadth-first ball round `order[0]`.
+    fn grow(&mut self, sweep: &Sweep) {
         let stamp = self.stamp;
-        let around = |u: u32| {
-            let u = u as usize;
-            &sweep.neighbours[sweep.start[u]..sweep.start[u + 1]]
-        };
-        // The ball: vertices within LOCAL_HOPS edges, breadth first.
-        self.order.clear();
-        self.order.push(v);
-        self.in_ball[v as usize] = stamp;
-        let mut head = 0;
-        for _ in 0..LOCAL_HOPS {
-            let end = self.order.len();
-            while head < end {
-                let u = self.order[head];
-                head += 1;
-                for &w in around(u) {
-                    if self.in_ball[w as usize] != stamp {
-                        self.in_ball[w as usize] = stamp;
-                        self.order.push(w);
-                    }
+        let end = self.order.len();
+        // The layer's neighbour lists are asked for at once: each is a cache miss of
+        // its own, which the walk below would otherwise wait on one by one.
+        for &u in &self.order[self.head..end] {
+            prefetch(
+                sweep
+                    .neighbours
+                    .as_ptr()
+                    .wrapping_add(sweep.start[u as usize]),
+            );
+        }
+        while self.head < end {
+            let u = self.order[self.head] as usize;
+            self.head += 1;
+            for &w in &sweep.neighbours[sweep.start[u]..sweep.start[u + 1]] {
+                if self.in_ball[w as usize] != stamp {
+                    self.in_ball[w as usize] = stamp;
+                    self.order.push(w);
+                    prefetch(sweep.start.as_ptr().wrapping_add(w as usize));
                 }
             }
         }
-        // Flood the ball's superlevel vertices from one upper neighbour of v.
-        let upper: Vec<u32> = around(v)
-            .iter()
-            .copied()
-            .filter(|&u| added[u as usize])
-            .collect();
-        let first = *upper.first()?;
+        self.hops += 1;
+    }
+
+    /// Whether the ball's superlevel vertices other than `v` join all of `upper`.
+    fn floods(&mut self, sweep: &Sweep, v: u32, added: &[bool]) -> bool {
+        let Some(&first) = self.upper.first() else {
+            return false;
+        };
+        self.flood_stamp += 1;
+        let (stamp, flood) = (self.stamp, self.flood_stamp);
         self.queue.clear();
         self.queue.push(first);
-        self.reached[first as usize] = stamp;
+        self.reached[first as usize] = flood;
         // Upper neighbours not reached yet: the flood stops once it has them all.
-        let mut missing = upper.len() - 1;
+        let mut missing = self.upper.len() - 1;
         while let Some(u) = self.queue.pop() {
             if missing == 0 {
                 break;
             }
-            for &w in around(u) {
+            let u = u as usize;
+            for &w in &sweep.neighbours[sweep.start[u]..sweep.start[u + 1]] {
                 let wi = w as usize;
-                if w != v && added[wi] && self.in_ball[wi] == stamp && self.reached[wi] != stamp {
-                    self.reached[wi] = stamp;
+                if w != v && added[wi] && self.in_ball[wi] == stamp && self.reached[wi] != flood {
+                    self.reached[wi] = flood;
                     self.queue.push(w);
-                    missing -= usize::from(upper.contains(&w));
+                    missing -= usize::from(self.upper.contains(&w));
                 }
             }
         }
-        (missing == 0).then_some(&self.order[1..])
+        missing == 0
+    }
+
+    /// If the superlevel set minus `v` joins all of `v`'s added neighbours within
+    /// [`LOCAL_HOPS`] edges of `v` (the cycle `v` closes lies in that ball): true, and
+    /// the ball is ready for [`Ball::nearest`]. Otherwise false: the cycle leaves it.
+    fn local_cycle(&mut self, sweep: &Sweep, v: u32, added: &[bool]) -> bool {
+        self.stamp += 1;
+        self.order.clear();
+        self.order.push(v);
+        self.in_ball[v as usize] = self.stamp;
+        self.head = 0;
+        self.hops = 0;
+        let vi = v as usize;
+        self.upper.clear();
+        self.upper.extend(
+            sweep.neighbours[sweep.start[vi]..sweep.start[vi + 1]]
+                .iter()
+                .copied()
+                .filter(|&u| added[u as usize]),
+        );
+        while self.hops < FIRST_HOPS.min(LOCAL_HOPS) {
+            self.grow(sweep);
+        }
+        if self.floods(sweep, v, added) {
+            return true;
+        }
+        if self.hops == LOCAL_HOPS {
+            return false;
+        }
+        while self.hops < LOCAL_HOPS {
+            self.grow(sweep);
+        }
+        self.floods(sweep, v, added)
+    }
+
+    /// The first of the ball's vertices other than its centre, nearest first (the
+    /// breadth-first order of the whole ball of [`LOCAL_HOPS`]), for which `pick` gives
+    /// a value; the ball grows to its whole radius only when the part built has none.
+    fn nearest<T>(&mut self, sweep: &Sweep, mut pick: impl FnMut(u32) -> Option<T>) -> Option<T> {
+        let mut from = 1;
+        loop {
+            if let Some(found) = self.order[from..].iter().find_map(|&u| pick(u)) {
+                return Some(found);
+            }
+            if self.hops == LOCAL_HOPS {
+                return None;
+            }
+            from = self.order.len();
+            self.grow(sweep);
+        }
     }
 }
 
@@ -677,5 +768,145 @@ impl Forest {
             self.records[xi] = u64::from(up);
             x = up;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A grid of `n`³ unit cubes, each split into six tets round its diagonal; the
+    /// grid's outer vertices are surface vertices, the rest interior.
+    fn cube_grid(n: usize) -> TetMesh {
+        let side = n + 1;
+        let id = |x: usize, y: usize, z: usize| (x + side * (y + side * z)) as u32;
+        let mut positions = Vec::new();
+        let mut kinds = Vec::new();
+        for z in 0..side {
+            for y in 0..side {
+                for x in 0..side {
+                    positions.push([x as f64, y as f64, z as f64]);
+                    let outer = [x, y, z].iter().any(|&c| c == 0 || c == n);
+                    kinds.push(if outer {
+                        VertexKind::Surface
+                    } else {
+                        VertexKind::Interior
+                    });
+                }
+            }
+        }
+        let mut tets = Vec::new();
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let corner = |b: [usize; 3]| id(x + b[0], y + b[1], z + b[2]);
+                    for axes in [
+                        [0, 1, 2],
+                        [0, 2, 1],
+                        [1, 0, 2],
+                        [1, 2, 0],
+                        [2, 0, 1],
+                        [2, 1, 0],
+                    ] {
+                        let mut at = [0usize; 3];
+                        let mut tet = [corner(at); 4];
+                        for (k, &a) in axes.iter().enumerate() {
+                            at[a] = 1;
+                            tet[k + 1] = corner(at);
+                        }
+                        tets.push(tet);
+                    }
+                }
+            }
+        }
+        TetMesh::new(positions, tets, kinds).unwrap()
+    }
+
+    /// The local-cycle test read directly: the whole ball of [`LOCAL_HOPS`] round `v` in
+    /// breadth-first order, and whether its superlevel vertices other than `v` join all
+    /// of `v`'s added neighbours.
+    fn whole_ball(sweep: &Sweep, v: u32, added: &[bool]) -> (bool, Vec<u32>) {
+        let around =
+            |u: u32| &sweep.neighbours[sweep.start[u as usize]..sweep.start[u as usize + 1]];
+        let mut order = vec![v];
+        let mut hops = vec![0usize];
+        let mut head = 0;
+        while head < order.len() {
+            let (u, h) = (order[head], hops[head]);
+            head += 1;
+            if h == LOCAL_HOPS {
+                continue;
+            }
+            for &w in around(u) {
+                if !order.contains(&w) {
+                    order.push(w);
+                    hops.push(h + 1);
+                }
+            }
+        }
+        let upper: Vec<u32> = around(v)
+            .iter()
+            .copied()
+            .filter(|&u| added[u as usize])
+            .collect();
+        let Some(&first) = upper.first() else {
+            return (false, order);
+        };
+        let mut reached = vec![first];
+        let mut stack = vec![first];
+        while let Some(u) = stack.pop() {
+            for &w in around(u) {
+                if w != v && added[w as usize] && order.contains(&w) && !reached.contains(&w) {
+                    reached.push(w);
+                    stack.push(w);
+                }
+            }
+        }
+        (upper.iter().all(|u| reached.contains(u)), order)
+    }
+
+    #[test]
+    fn the_ball_grown_as_needed_decides_and_orders_as_the_whole_ball() {
+        let mesh = cube_grid(7);
+        let sweep = Sweep::new(&mesh);
+        let n = mesh.num_vertices();
+        // A rough field (a fixed pseudo-random sequence): many small cycles, some not.
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let f: Vec<f64> = (0..n)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64
+            })
+            .collect();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_by(|&a, &b| f[b as usize].total_cmp(&f[a as usize]));
+        let mut added = vec![false; n];
+        let mut ball = Ball::new(n);
+        let (mut local, mut wide, mut grown_to_find) = (0, 0, 0);
+        for &v in &order {
+            let (expected, whole) = whole_ball(&sweep, v, &added);
+            assert_eq!(ball.local_cycle(&sweep, v, &added), expected, "vertex {v}");
+            if expected {
+                local += 1;
+                wide += usize::from(ball.hops == LOCAL_HOPS);
+                // Sparse enough that some are found only in the outer layer.
+                let pick = |u: u32| (added[u as usize] && u % 23 == 2).then_some(u);
+                let before = ball.hops;
+                let found = ball.nearest(&sweep, pick);
+                assert_eq!(
+                    found,
+                    whole[1..].iter().find_map(|&u| pick(u)),
+                    "vertex {v}"
+                );
+                grown_to_find += usize::from(found.is_some() && before < ball.hops);
+            }
+            added[v as usize] = true;
+        }
+        // Both ways out of the test were taken, and balls grown to their whole radius,
+        // by the test itself and by the search for the nearest vertex.
+        assert!(local > 0 && local < n, "{local} of {n}");
+        assert!(wide > 0 && grown_to_find > 0, "{wide} {grown_to_find}");
     }
 }
