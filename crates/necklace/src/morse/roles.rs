@@ -291,16 +291,15 @@ impl Sweep {
             .collect();
         interior.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
         // What the sweep reads of each vertex beside its neighbours, in the sweep's
-        // order (its class's kind and upper link components, and where its neighbours
-        // start, so that they can be asked for ahead): read at the vertex's own place,
-        // every step waited on a cache miss. The unsmoothed distance takes the place of
-        // the key, no longer needed.
-        let mut read: Vec<(VertexType, u32, usize)> = Vec::with_capacity(interior.len());
+        // order (its class's kind and upper link components, at most 65 535 as its link
+        // vertices are): read at the vertex's own place, every step waited on a cache
+        // miss. The unsmoothed distance takes the place of the key, no longer needed.
+        let mut read: Vec<(VertexType, u16)> = Vec::with_capacity(interior.len());
         for (key, v) in &mut interior {
             let vi = *v as usize;
             *key = distance[vi];
             let class = &classification.classes[vi];
-            read.push((class.kind, class.upper, self.start[vi]));
+            read.push((class.kind, u16::try_from(class.upper).unwrap_or(u16::MAX)));
         }
         let outer = (0..n as u32).filter(|&v| self.kinds[v as usize] == VertexKind::Outer);
 
@@ -332,9 +331,15 @@ impl Sweep {
         let mut closers = Vec::new();
         let mut value = vec![0u64; w];
         let mut root_into = vec![0u64; w];
-        for (i, (&(d, v), &(kind, upper_components, _))) in interior.iter().zip(&read).enumerate() {
-            if let Some(&(_, _, ahead)) = read.get(i + PREFETCH_AHEAD) {
-                prefetch(self.neighbours.as_ptr().wrapping_add(ahead));
+        for (i, (&(d, v), &(kind, upper_components))) in interior.iter().zip(&read).enumerate() {
+            // The neighbours of a vertex a few steps on, asked for now: the sweep's own
+            // chain of reads would otherwise wait on them.
+            if let Some(&(_, ahead)) = interior.get(i + PREFETCH_AHEAD) {
+                prefetch(
+                    self.neighbours
+                        .as_ptr()
+                        .wrapping_add(self.start[ahead as usize]),
+                );
             }
             let vi = v as usize;
             added[vi] = true;
@@ -361,7 +366,7 @@ impl Sweep {
                 }
                 // Each upper link component beyond one per root can close a cycle; look
                 // for that many new classes among the ways down from one component.
-                let can_close = upper_components as usize;
+                let can_close = usize::from(upper_components);
                 let mut open = can_close.saturating_sub(roots.len());
                 if w == 0 {
                     open = 0;
