@@ -84,22 +84,42 @@ impl SparseMatrix {
 
     /// `y = A x` into a buffer of `n` entries, rows in parallel.
     pub fn mul_vec_into(&self, x: &[f64], y: &mut [f64]) {
-        row_products(&self.row_start, &self.cols, &self.vals, x, y, |yi, s| {
+        row_products(&self.row_start, &self.cols, &self.vals, x, y, |_, yi, s| {
             *yi = s
         });
     }
 }
 
+/// A square linear operator applied row by row in parallel, each row summed in a fixed
+/// order (so the result does not depend on the thread count): a stored matrix, or one
+/// applied without being assembled.
+pub trait LinearOperator: Sync {
+    /// Number of rows (and columns).
+    fn size(&self) -> usize;
+    /// `y = A x` into a buffer of [`LinearOperator::size`] entries.
+    fn apply_into(&self, x: &[f64], y: &mut [f64]);
+}
+
+impl LinearOperator for SparseMatrix {
+    fn size(&self) -> usize {
+        self.n
+    }
+
+    fn apply_into(&self, x: &[f64], y: &mut [f64]) {
+        self.mul_vec_into(x, y);
+    }
+}
+
 /// Each row's product with `x` of the compressed-row matrix `(row_start, cols, vals)`
-/// (any shape), stored into `y` by `store`. Rows run in parallel, each summed in its
-/// stored order, so the result does not depend on the thread count.
+/// (any shape), stored into `y` by `store(row, y_row, sum)`. Rows run in parallel,
+/// each summed in its stored order, so the result does not depend on the thread count.
 pub(crate) fn row_products<V: Copy + Into<f64> + Sync>(
     row_start: &[usize],
     cols: &[u32],
     vals: &[V],
     x: &[f64],
     y: &mut [f64],
-    store: impl Fn(&mut f64, f64) + Sync,
+    store: impl Fn(usize, &mut f64, f64) + Sync,
 ) {
     y.par_chunks_mut(ROWS_PER_TASK)
         .enumerate()
@@ -112,7 +132,7 @@ pub(crate) fn row_products<V: Copy + Into<f64> + Sync>(
                     .zip(&vals[range])
                     .map(|(&c, &v)| v.into() * x[c as usize])
                     .sum();
-                store(yi, s);
+                store(first + k, yi, s);
             }
         });
 }

@@ -25,7 +25,8 @@
 //!
 //! **Apply** ([`Hierarchy::apply`]): one V-cycle from zero with [`SWEEPS`] damped Jacobi
 //! sweeps before and after the coarse correction: a symmetric positive definite
-//! preconditioner for CG. The finest level's matrix is the caller's (not copied).
+//! preconditioner for CG. The finest level's operator is the caller's (not copied, and
+//! not necessarily assembled: the heat solver applies `M + τL` from `L` and `M`).
 //!
 //! **Memory** (about 130 bytes an unknown on a million): the setup borrows the finest
 //! level's pattern and `L`, and reads its lumped `M` on the diagonal; the transfers are
@@ -39,7 +40,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::laplacian::{chunked_dot as dot, row_products, SparseMatrix};
+use super::laplacian::{chunked_dot as dot, row_products, LinearOperator, SparseMatrix};
 
 /// Levels stop coarsening at this many unknowns; the coarsest is solved exactly.
 pub const COARSEST: usize = 400;
@@ -93,14 +94,14 @@ impl<V: Copy + Default + Into<f64> + Sync> Transfer<V> {
 
     /// `y = self · x`, rows in parallel.
     fn mul_into(&self, x: &[f64], y: &mut [f64]) {
-        row_products(&self.row_start, &self.cols, &self.vals, x, y, |yi, s| {
+        row_products(&self.row_start, &self.cols, &self.vals, x, y, |_, yi, s| {
             *yi = s
         });
     }
 
     /// `y += self · x`, rows in parallel.
     fn mul_add_into(&self, x: &[f64], y: &mut [f64]) {
-        row_products(&self.row_start, &self.cols, &self.vals, x, y, |yi, s| {
+        row_products(&self.row_start, &self.cols, &self.vals, x, y, |_, yi, s| {
             *yi += s
         });
     }
@@ -340,12 +341,12 @@ impl Hierarchy {
         self.factor = dense.cholesky();
     }
 
-    /// `z = B r`: one V-cycle from zero. `fine` is the finest level's current matrix
+    /// `z = B r`: one V-cycle from zero. `fine` is the finest level's current operator
     /// and `fine_inverse_diagonal` its inverse diagonal; `work` holds the cycle's
     /// vectors between calls (no allocation per cycle).
     pub fn apply(
         &self,
-        fine: &SparseMatrix,
+        fine: &dyn LinearOperator,
         fine_inverse_diagonal: &[f64],
         r: &[f64],
         z: &mut [f64],
@@ -354,7 +355,7 @@ impl Hierarchy {
         if work.levels.len() != self.levels.len() + 1 {
             // The finest level's right-hand side and solution are the caller's: only
             // its scratch vector is needed.
-            work.levels = std::iter::once((Vec::new(), Vec::new(), vec![0.0; fine.n]))
+            work.levels = std::iter::once((Vec::new(), Vec::new(), vec![0.0; fine.size()]))
                 .chain(self.levels.iter().map(|l| {
                     let n = l.operator.matrix.n;
                     (vec![0.0; n], vec![0.0; n], vec![0.0; n])
@@ -378,7 +379,7 @@ impl Hierarchy {
     fn cycle(
         &self,
         k: usize,
-        a: &SparseMatrix,
+        a: &dyn LinearOperator,
         inverse_diagonal: &[f64],
         weight: f64,
         r: &[f64],
@@ -404,7 +405,7 @@ impl Hierarchy {
         jacobi_from_zero(inverse_diagonal, weight, r, z);
         jacobi_sweeps(a, inverse_diagonal, weight, r, z, scratch, SWEEPS - 1);
         // Coarse correction: restrict the residual, cycle, prolong.
-        a.mul_vec_into(z, scratch);
+        a.apply_into(z, scratch);
         scratch.par_iter_mut().zip(r).for_each(|(q, r)| *q = r - *q);
         let transfer = &self.transfers[k];
         let next = &self.levels[k];
@@ -457,7 +458,7 @@ fn jacobi_from_zero(inverse_diagonal: &[f64], weight: f64, r: &[f64], z: &mut [f
 
 /// `sweeps` damped Jacobi sweeps `z += ω D⁻¹ (r − A z)`.
 fn jacobi_sweeps(
-    a: &SparseMatrix,
+    a: &dyn LinearOperator,
     inverse_diagonal: &[f64],
     weight: f64,
     r: &[f64],
@@ -466,7 +467,7 @@ fn jacobi_sweeps(
     sweeps: usize,
 ) {
     for _ in 0..sweeps {
-        a.mul_vec_into(z, scratch);
+        a.apply_into(z, scratch);
         z.par_iter_mut()
             .zip(scratch.par_iter())
             .zip(r)

@@ -1,9 +1,10 @@
 //! Implicit heat steps `(M + τL) F' = M F` with Dirichlet values (paper sec. 4.2).
 //!
 //! Fixed vertices keep their values; the free ones solve the reduced system
-//! `(M + τL)_ff F'_f = M_f F_f − τ L_fd F_d`, assembled once ([`HeatSolver::new`]) and
-//! solved every step ([`HeatSolver::step`]) by conjugate gradients, warm-started from
-//! the current field, with one of two preconditioners ([`Preconditioner`]): the
+//! `(M + τL)_ff F'_f = M_f F_f − τ L_fd F_d`, of which `L_ff` is assembled once
+//! ([`HeatSolver::new`]; `M + τL` is applied from it and the diagonal `M_f`, never
+//! stored) and which is solved every step ([`HeatSolver::step`]) by conjugate
+//! gradients, warm-started from the current field, with one of two preconditioners ([`Preconditioner`]): the
 //! diagonal (Jacobi), or a smoothed-aggregation multigrid V-cycle
 //! ([`multigrid`](super::multigrid), built once for all `τ`); by default the second
 //! from [`MULTIGRID_MIN_UNKNOWNS`] to [`MULTIGRID_MAX_UNKNOWNS`] unknowns, the first
@@ -15,7 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::laplacian::{chunked_dot as dot, row_products, SparseMatrix, CHUNK};
+use super::laplacian::{chunked_dot as dot, row_products, LinearOperator, SparseMatrix, CHUNK};
 use super::multigrid::{Hierarchy, HierarchyInfo, Workspace};
 
 /// The preconditioner of the conjugate-gradient solve.
@@ -123,16 +124,15 @@ pub struct StepReport {
 pub struct HeatSolver {
     /// Global index of each free (unknown) vertex.
     free: Vec<u32>,
-    /// `(M + τL)_ff` in free indices.
-    matrix: SparseMatrix,
-    /// `L_ff`'s values in `matrix`'s pattern, and where each row's diagonal is: to
-    /// change `τ` without assembling again.
-    stiffness_values: Vec<f64>,
+    /// `L_ff` in free indices, with an entry on every row's diagonal (at
+    /// `diagonal_index`): `(M + τL)_ff` is applied from it and `M_f` ([`HeatMatrix`]),
+    /// never assembled, as its values would be the side's largest array again.
+    stiffness: SparseMatrix,
     diagonal_index: Vec<usize>,
     /// `L_fd F_d` (without `τ`).
     boundary_stiffness: Vec<f64>,
     tau: f64,
-    /// `1 / diag(matrix)`.
+    /// `1 / diag(M + τL)_ff`.
     inverse_diagonal: Vec<f64>,
     /// `M_f`.
     mass: Vec<f64>,
@@ -214,13 +214,12 @@ impl HeatSolver {
         let mass = free.iter().map(|&v| mass[v as usize]).collect();
         let mut solver = HeatSolver {
             free,
-            matrix: SparseMatrix {
+            stiffness: SparseMatrix {
                 n,
                 row_start,
                 cols,
-                vals: Vec::new(),
+                vals: stiffness_values,
             },
-            stiffness_values,
             diagonal_index,
             boundary_stiffness,
             tau: 0.0,
@@ -233,8 +232,8 @@ impl HeatSolver {
         };
         if options.preconditioner.multigrid_for(n) {
             solver.multigrid = Hierarchy::new(
-                &solver.matrix,
-                &solver.stiffness_values,
+                &solver.stiffness,
+                &solver.stiffness.vals,
                 &solver.diagonal_index,
                 &solver.mass,
             );
@@ -253,24 +252,19 @@ impl HeatSolver {
         self.tau
     }
 
-    /// Change the time step: `(M + τL)_ff` and `τ L_fd F_d` are rebuilt from the stored
-    /// parts (no assembly), and so are the multigrid levels' matrices. The stored
-    /// solutions need nothing: their products with the new matrix are `M_f x + τ L_ff x`.
+    /// Change the time step: the diagonal of `(M + τL)_ff` and `τ L_fd F_d` are rebuilt
+    /// from the stored parts (no assembly), and so are the multigrid levels' matrices.
+    /// The stored solutions need nothing: their products with the new matrix are
+    /// `M_f x + τ L_ff x`.
     pub fn set_tau(&mut self, tau: f64) {
-        if tau == self.tau && !self.matrix.vals.is_empty() {
+        if tau == self.tau && !self.inverse_diagonal.is_empty() {
             return;
         }
         self.tau = tau;
-        // In place: the matrix is the run's largest array.
-        let vals = &mut self.matrix.vals;
-        vals.resize(self.stiffness_values.len(), 0.0);
-        vals.par_iter_mut()
-            .zip(self.stiffness_values.par_iter())
-            .for_each(|(v, l)| *v = tau * l);
-        for (i, &d) in self.diagonal_index.iter().enumerate() {
-            vals[d] += self.mass[i];
-        }
-        self.inverse_diagonal = self.diagonal_index.iter().map(|&d| 1.0 / vals[d]).collect();
+        let stiffness = &self.stiffness.vals;
+        self.inverse_diagonal = (self.diagonal_index.iter().zip(&self.mass))
+            .map(|(&d, m)| 1.0 / (tau * stiffness[d] + m))
+            .collect();
         self.boundary = self.boundary_stiffness.iter().map(|x| tau * x).collect();
         if let Some(multigrid) = &mut self.multigrid {
             multigrid.set_tau(tau);
@@ -280,6 +274,15 @@ impl HeatSolver {
     /// Number of unknowns.
     pub fn unknowns(&self) -> usize {
         self.free.len()
+    }
+
+    /// `(M + τL)_ff` at the current `τ`.
+    fn operator(&self) -> HeatMatrix<'_> {
+        HeatMatrix {
+            stiffness: &self.stiffness,
+            mass: &self.mass,
+            tau: self.tau,
+        }
     }
 
     /// One step: `field` (every vertex) → the new field (fixed vertices unchanged).
@@ -303,14 +306,7 @@ impl HeatSolver {
         }
         // `L_ff x` once, in the matrix's pattern: every later `τ` reuses it.
         let mut stiffness_x = vec![0.0; x.len()];
-        row_products(
-            &self.matrix.row_start,
-            &self.matrix.cols,
-            &self.stiffness_values,
-            &x,
-            &mut stiffness_x,
-            |y, s| *y = s,
-        );
+        self.stiffness.mul_vec_into(&x, &mut stiffness_x);
         self.history.push((x, stiffness_x));
         (out, report)
     }
@@ -354,7 +350,7 @@ impl HeatSolver {
         let n = b.len();
         let tolerance = self.options.tolerance;
         let mut q = vec![0.0; n];
-        self.matrix.mul_vec_into(&x, &mut q);
+        self.operator().apply_into(&x, &mut q);
         let mut r: Vec<f64> = (0..n).map(|i| b[i] - q[i]).collect();
         let b_norm = dot(b, b).sqrt().max(f64::MIN_POSITIVE);
         let mut work = Workspace::default();
@@ -382,7 +378,7 @@ impl HeatSolver {
                         (rz, rr)
                     } else {
                         multigrid.apply(
-                            &self.matrix,
+                            &self.operator(),
                             &self.inverse_diagonal,
                             &r,
                             &mut z,
@@ -415,7 +411,7 @@ impl HeatSolver {
     fn precondition(&self, r: &[f64], z: &mut [f64], work: &mut Workspace) {
         let d = &self.inverse_diagonal;
         match &self.multigrid {
-            Some(multigrid) => multigrid.apply(&self.matrix, d, r, z, work),
+            Some(multigrid) => multigrid.apply(&self.operator(), d, r, z, work),
             None => z
                 .par_iter_mut()
                 .zip(r)
@@ -460,9 +456,9 @@ impl HeatSolver {
         )
     }
 
-    /// `q = A p`, returning `p · q` (chunked, fixed order).
+    /// `q = A p = M_f p + τ L_ff p`, returning `p · q` (chunked, fixed order).
     fn mul_vec_dot(&self, p: &[f64], q: &mut [f64]) -> f64 {
-        let m = &self.matrix;
+        let (m, mass, tau) = (&self.stiffness, &self.mass, self.tau);
         let partial: Vec<f64> = q
             .par_chunks_mut(CHUNK)
             .enumerate()
@@ -472,17 +468,38 @@ impl HeatSolver {
                 for (k, qi) in qc.iter_mut().enumerate() {
                     let i = start + k;
                     let range = m.row_start[i]..m.row_start[i + 1];
-                    *qi = m.cols[range.clone()]
+                    let lp: f64 = m.cols[range.clone()]
                         .iter()
                         .zip(&m.vals[range])
                         .map(|(&c, &v)| v * p[c as usize])
                         .sum();
+                    *qi = tau * lp + mass[i] * p[i];
                     sum += p[i] * *qi;
                 }
                 sum
             })
             .collect();
         partial.iter().sum()
+    }
+}
+
+/// `(M + τL)_ff` applied as `M_f x + τ (L_ff x)` from the solver's parts.
+struct HeatMatrix<'a> {
+    stiffness: &'a SparseMatrix,
+    mass: &'a [f64],
+    tau: f64,
+}
+
+impl LinearOperator for HeatMatrix<'_> {
+    fn size(&self) -> usize {
+        self.stiffness.n
+    }
+
+    fn apply_into(&self, x: &[f64], y: &mut [f64]) {
+        let m = self.stiffness;
+        row_products(&m.row_start, &m.cols, &m.vals, x, y, |i, yi, lx| {
+            *yi = self.tau * lx + self.mass[i] * x[i]
+        });
     }
 }
 
@@ -558,18 +575,7 @@ mod tests {
         }
         solver.set_tau(5.0);
         // Each stored stiffness product is L_ff x.
-        let l_ff = |x: &[f64]| {
-            let mut y = vec![0.0; x.len()];
-            row_products(
-                &solver.matrix.row_start,
-                &solver.matrix.cols,
-                &solver.stiffness_values,
-                x,
-                &mut y,
-                |y, s| *y = s,
-            );
-            y
-        };
+        let l_ff = |x: &[f64]| solver.stiffness.mul_vec(x);
         for (x, lx) in &solver.history {
             assert_eq!(&l_ff(x), lx);
         }
@@ -580,14 +586,14 @@ mod tests {
             .collect();
         let guess = solver.initial_guess(&b, vec![0.0; free]);
         let k = solver.history.len();
+        // (M + 5 L)_ff assembled here from the path's own matrix (free: 1..n-1).
+        let a_ff = DMatrix::from_fn(free, free, |i, j| {
+            5.0 * stiffness.get(i + 1, j + 1) + if i == j { mass[i + 1] } else { 0.0 }
+        });
         let ax: Vec<Vec<f64>> = solver
             .history
             .iter()
-            .map(|(x, _)| {
-                let mut y = vec![0.0; free];
-                solver.matrix.mul_vec_into(x, &mut y);
-                y
-            })
+            .map(|(x, _)| (&a_ff * DVector::from_column_slice(x)).as_slice().to_vec())
             .collect();
         let g = DMatrix::from_fn(k, k, |i, j| dot(&solver.history[i].0, &ax[j]));
         let r = DVector::from_fn(k, |i, _| dot(&solver.history[i].0, &b));
