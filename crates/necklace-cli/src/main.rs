@@ -23,7 +23,6 @@ use necklace::Side;
 use necklace::{io, MeshReport};
 use progress::Bars;
 
-mod allocator;
 mod batch;
 mod bench;
 mod demo;
@@ -32,7 +31,6 @@ mod print;
 mod progress;
 
 fn main() -> ExitCode {
-    allocator::configure();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(err) => return print::argument_error(&err),

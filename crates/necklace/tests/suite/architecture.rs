@@ -37,7 +37,6 @@ const CRATES: &[(&str, Option<&[&str]>)] = &[
     ("sha2", Some(&["batch"])),
     ("rustc_hash", Some(&["volume"])),
     ("indicatif", Some(&[])),
-    ("libc", Some(&[])),
 ];
 
 /// `text` with comments, string and character literals replaced by spaces (line
@@ -448,28 +447,18 @@ fn modules_follow_the_import_rules() {
     assert!(broken.is_empty(), "{}", broken.join("\n"));
 }
 
-/// Which CLI modules name `krate`.
-fn cli_modules_naming(krate: &str) -> Vec<Vec<String>> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../necklace-cli/src");
-    module_files(&src, Vec::new())
-        .into_iter()
-        .filter(|(module, text)| {
-            scoped_paths(module, text)
-                .iter()
-                .any(|(_, p)| p.first().is_some_and(|s| s == krate))
-        })
-        .map(|(module, _)| module)
-        .collect()
-}
-
 #[test]
 fn only_the_cli_progress_bars_name_indicatif() {
-    assert_eq!(cli_modules_naming("indicatif"), [["progress"]]);
-}
-
-#[test]
-fn only_the_cli_allocator_settings_name_libc() {
-    assert_eq!(cli_modules_naming("libc"), [["allocator"]]);
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../necklace-cli/src");
+    for (module, text) in module_files(&src, Vec::new()) {
+        let names = scoped_paths(&module, &text)
+            .iter()
+            .any(|(_, p)| p.first().is_some_and(|s| s == "indicatif"));
+        assert!(
+            !names || module == ["progress"],
+            "{module:?} names indicatif; only the CLI's progress.rs may"
+        );
+    }
 }
 
 #[test]
