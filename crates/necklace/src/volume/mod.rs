@@ -22,7 +22,9 @@
 //! and gaps at every vertex, creases, crossings, the report the prediction reads) and
 //! [`volume_mesh_surveyed`] meshes a side from them (the pipeline meshes both sides from
 //! one survey): a thin part or gap gets two cells across, but a thin part of the solid
-//! one (at most `h / 2`) in the shell's mesh, which only has to stay out of it.
+//! one (at most `h / 2`) in the shell's mesh, which only has to stay out of it, and a
+//! gap no finer than `h / 4` (and a quarter of the solid's thickness beside it) in the
+//! solid's mesh, which holds no field there.
 //!
 //! Steps (Labelle & Shewchuk, "Isosurface Stuffing", SIGGRAPH 2007):
 //! 1. `octree`: an octree, balanced bottom-up, whose cells have size `h` wherever the

@@ -373,8 +373,11 @@ struct SurfaceSizing {
     /// Per vertex, the cell size asked for (half the thinner of the two, at most `h`).
     spacing: Vec<f64>,
     /// Thin parts and gaps as measured at the vertices and faces, and the crossing curve,
-    /// as sizing features: for the mesh of the solid (0) and of the gap (1).
-    sizing: [Vec<SizingFeature>; 2],
+    /// as sizing features: for the mesh of the solid (0), of the gap (1), and of the
+    /// solid without the gaps' floor (2: a side whose topology is not predicted, where
+    /// no check would find a gap bridged at one cell across; see
+    /// [`super::surface_sizing::GAP_FLOOR_OF_H`]).
+    sizing: [Vec<SizingFeature>; 3],
     /// The crossing curve's sizing features alone.
     crossing_sizing: Vec<SizingFeature>,
     /// Vertices whose thickness is not measured (at crossings).
@@ -382,7 +385,7 @@ struct SurfaceSizing {
     /// The sizing by the thickness sampled over the triangles too, for each side as
     /// `sizing`: made the first time the side asks (its vertices' sizing gave another
     /// topology).
-    sampled: [std::sync::OnceLock<SampledSizing>; 2],
+    sampled: [std::sync::OnceLock<SampledSizing>; 3],
     /// The thickness sampled over the triangles ([`sample_thickness`]): made the first
     /// time a side asks (the sampled sizing, or the sampled mesher), then shared.
     samples: std::sync::OnceLock<ThicknessSamples>,
@@ -730,8 +733,8 @@ fn size_surface(
             toward: [0.0; 3],
         })
         .collect();
-    let sizing = [0, 1].map(|covered| {
-        let mut sizing = thin_part_sizing(&measured, covered, h);
+    let sizing = [0, 1, 2].map(|which| {
+        let mut sizing = thin_part_sizing(&measured, covered_by(which), h, which == 0);
         sizing.extend(&crossing_sizing);
         sizing
     });
@@ -747,6 +750,12 @@ fn size_surface(
         features,
         topology,
     }
+}
+
+/// The side of the thickness that the mesh of [`SurfaceSizing`]'s sizing `which` covers:
+/// the solid (0) for the meshes of the solid, the gap (1) for the shell's.
+fn covered_by(which: usize) -> usize {
+    usize::from(which == 1)
 }
 
 /// The sizing by the thickness sampled over the triangles ([`sample_thickness`]).
@@ -767,17 +776,17 @@ impl SurfaceSizing {
         &self.measured.thickness[..self.spacing.len()]
     }
 
-    /// The sizing by the thickness sampled over the triangles for the mesh of the solid
-    /// (`covered` 0) or the gap (1), made on the first call.
+    /// The sizing by the thickness sampled over the triangles for the mesh `which` (as
+    /// in `sizing`), made on the first call.
     fn sampled(
         &self,
         surface: &SurfaceMesh,
         distance: &SurfaceDistance,
-        covered: usize,
+        which: usize,
     ) -> &SampledSizing {
-        self.sampled[covered].get_or_init(|| {
+        self.sampled[which].get_or_init(|| {
             let samples = self.samples(surface, distance);
-            let mut sizing = thin_part_sizing(samples, covered, self.h);
+            let mut sizing = thin_part_sizing(samples, covered_by(which), self.h, which == 0);
             sizing.extend(&self.crossing_sizing);
             SampledSizing {
                 sizing,
@@ -824,19 +833,24 @@ fn stuff_surface(
         max_memory: options.max_memory,
         min_dihedral_deg: options.min_dihedral_deg,
     };
-    // The mesh of the solid covers side 0 of the thickness, the shell side 1.
-    let covered = usize::from(sphere.is_some());
+    // The shell's sizing, the solid's with the gaps' floor where the topology is
+    // checked, or without it.
+    let which = match (sphere, expected) {
+        (Some(_), _) => 1,
+        (None, Some(_)) => 0,
+        (None, None) => 2,
+    };
     if sphere.is_none() {
-        refuse_if_all_below_floor(&surveyed.sizing[0], surveyed.thickness(), &stuffing)?;
+        refuse_if_all_below_floor(&surveyed.sizing[which], surveyed.thickness(), &stuffing)?;
     }
     let bounds = surface.bounding_box().unwrap_or_default();
     // One meshing with the vertices' sizing or the sampled one, and `extra`
     // (refinements from earlier rounds), inside or in the shell.
     let stuff = |sampled: bool, extra: &[SizingFeature]| {
         let sizing = if sampled {
-            &surveyed.sampled(surface, distance, covered).sizing
+            &surveyed.sampled(surface, distance, which).sizing
         } else {
-            &surveyed.sizing[covered]
+            &surveyed.sizing[which]
         };
         let inside = SurfaceInside {
             distance,
@@ -858,7 +872,7 @@ fn stuff_surface(
         warnings,
     )?;
     let samples = if meshed.sampled {
-        let sampled = surveyed.sampled(surface, distance, covered);
+        let sampled = surveyed.sampled(surface, distance, which);
         if sampled.bound {
             warnings.push(format!(
                 "the thickness sampled over the triangles stopped at {} points (the bound is {MAX_SAMPLES}): the triangles left are sized by their corners",
