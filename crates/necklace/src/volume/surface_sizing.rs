@@ -53,7 +53,8 @@ pub(super) const CELLS_ACROSS_BEYOND: f64 = 1.0;
 /// from 82 459 unknowns to 57 710 with the same loops; the same loops on the 21 shared
 /// models. Without the bound by the solid's thickness, the boot's eyelet (a ring about
 /// `0.6 h` thick beside a gap) lost its saddle; at `h / 2`, the scorpion gained three
-/// handle loops.
+/// handle loops (docs/decisions.md, "a gap asks the solid's mesh for cells no finer than
+/// h/4", has the commands and the other models).
 pub(super) const GAP_FLOOR_OF_H: f64 = 0.25;
 
 /// Where the solid behind a gap's wall is thin, the floor of [`GAP_FLOOR_OF_H`] is at
