@@ -58,6 +58,11 @@ pub enum Command {
         /// is built.
         #[arg(long, default_value = "8G", value_parser = parse_memory, allow_negative_numbers = true)]
         max_memory: u64,
+        /// On a side whose topology the surface does not predict (it crosses itself, or
+        /// a component has no genus), no cell finer than this fraction of h is asked
+        /// for (0 turns the bound off); a warning says when it binds.
+        #[arg(long, default_value_t = 0.25, allow_negative_numbers = true)]
+        unchecked_min_cell: f64,
         /// The volume mesher: necklace's isosurface stuffing, the Delaunay
         /// tetrahedralization of points sampled on the surface (`sampled`, experimental),
         /// restricted Delaunay refinement from those points (`refined`, experimental), or
@@ -430,6 +435,11 @@ pub struct MethodArgs {
     /// estimated over it is refused before it is built.
     #[arg(long, default_value = "8G", value_parser = parse_memory, allow_negative_numbers = true)]
     pub max_memory: u64,
+    /// On a side whose topology the surface does not predict (it crosses itself, or
+    /// a component has no genus), no cell finer than this fraction of h is asked
+    /// for (0 turns the bound off); a warning says when it binds.
+    #[arg(long, default_value_t = 0.25, allow_negative_numbers = true)]
+    pub unchecked_min_cell: f64,
     /// The volume mesher: necklace's isosurface stuffing, the Delaunay tetrahedralization
     /// of points sampled on the surface (`sampled`, experimental), restricted Delaunay
     /// refinement from those points (`refined`, experimental), or TetGen "pq1.2"
@@ -454,6 +464,7 @@ impl MethodArgs {
             h: self.h,
             max_memory: self.max_memory,
             mesher: self.mesher.into(),
+            unchecked_min_cell: self.unchecked_min_cell,
             ..VolumeOptions::default()
         }
     }

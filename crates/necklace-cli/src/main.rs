@@ -91,6 +91,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             input,
             h,
             max_memory,
+            unchecked_min_cell,
             mesher,
             output,
             json,
@@ -98,6 +99,7 @@ fn run(command: Command, ui: &Ui) -> Result<String> {
             let options = VolumeOptions {
                 h,
                 max_memory,
+                unchecked_min_cell,
                 mesher: mesher.into(),
                 ..VolumeOptions::default()
             };

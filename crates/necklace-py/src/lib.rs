@@ -133,6 +133,7 @@ fn neck_options(options: &Bound<'_, PyDict>) -> PyResult<NeckOptions> {
         volume: VolumeOptions {
             h,
             max_memory: option(options, "max_memory", volume.max_memory)?,
+            unchecked_min_cell: option(options, "unchecked_min_cell", volume.unchecked_min_cell)?,
             ..volume
         },
         morse: MorseOptions {
@@ -486,6 +487,7 @@ fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("tau", options.morse.tau)?;
     out.set_item("h", options.volume.h)?;
     out.set_item("max_memory", options.volume.max_memory)?;
+    out.set_item("unchecked_min_cell", options.volume.unchecked_min_cell)?;
     out.set_item("max_steps", options.morse.max_steps)?;
     out.set_item(
         "solver",

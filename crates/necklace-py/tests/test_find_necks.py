@@ -182,6 +182,8 @@ def test_bad_input_raises_a_one_line_necklace_error(vertices, faces, message):
         dict(solver="fast"),
         dict(handles=False, tunnels=False),
         dict(max_memory=4000),
+        dict(unchecked_min_cell=-0.5),
+        dict(unchecked_min_cell=float("nan")),
         dict(levels="many"),
     ],
 )

@@ -400,6 +400,7 @@ def find_necks(
     tau: float = 0.01,
     h: Optional[float] = None,
     max_memory: int = 8_000_000_000,
+    unchecked_min_cell: float = 0.25,
     max_steps: int = 1000,
     solver: str = "auto",
     plane_offsets: int = 16,
@@ -438,6 +439,10 @@ def find_necks(
         max_memory: memory budget of the run in bytes, shared by the two volume
             meshes (400 bytes a tet): thin parts are not refined past it, and a mesh
             estimated over it is refused before it is built.
+        unchecked_min_cell: on a side whose topology the surface does not predict
+            (it crosses itself, or a component has no genus), no cell finer than this
+            fraction of ``h`` is asked for (0 turns the bound off); a warning says
+            when it binds.
         max_steps: the most heat steps a run may take.
         solver: preconditioner of the heat steps' conjugate gradients: ``"jacobi"``
             (the diagonal), ``"multigrid"`` (a smoothed-aggregation V-cycle: fewer,
@@ -500,6 +505,7 @@ def find_necks(
         tau=tau,
         h=h,
         max_memory=max_memory,
+        unchecked_min_cell=unchecked_min_cell,
         max_steps=max_steps,
         solver=solver,
         plane_offsets=plane_offsets,

@@ -17,8 +17,10 @@
 //!    there: the medial distance, which sees a wire's diameter where the ray sees a
 //!    chord) and asks for cells half of that wherever it is below `2h`
 //!    ([`SizingFeature`]s over the thin triangles, reaching into the part; no fixed
-//!    floor: the memory budget sets it). Folds of the surface and places where it
-//!    crosses itself are not parts, and are skipped;
+//!    floor where the topology is predicted: the memory budget sets it; where it is
+//!    not, [`VolumeOptions::unchecked_min_cell`] × h, with a warning when it binds).
+//!    Folds of the surface and places where it crosses itself are not parts, and are
+//!    skipped;
 //! 3. finds the creases and corners for the mesher to snap its boundary onto;
 //! 4. meshes (`volume::stuff_volume`) and compares the mesh's topology with the
 //!    prediction. Where they differ, it meshes again sized by the thickness sampled over
@@ -93,6 +95,13 @@ pub struct VolumeOptions {
     pub max_memory: u64,
     /// The quality step's target smallest dihedral angle, degrees (default 10).
     pub min_dihedral_deg: f64,
+    /// The finest cell the stuffing mesher asks for on a side whose topology the
+    /// surface does not predict (it crosses itself, or a component has no genus), as a
+    /// fraction of `h` (default 0.25; 0 turns the bound off). There no topology check
+    /// confirms what finer cells resolve, and the gaps measured at crossings, at
+    /// vertices buried in another part and at slivers would otherwise set the cell size
+    /// for the whole side; a warning gives the figures when the bound binds.
+    pub unchecked_min_cell: f64,
 }
 
 impl Default for VolumeOptions {
@@ -103,6 +112,7 @@ impl Default for VolumeOptions {
             sphere_scale: 1.5,
             max_memory: DEFAULT_MAX_MEMORY,
             min_dihedral_deg: 10.0,
+            unchecked_min_cell: 0.25,
         }
     }
 }
@@ -112,7 +122,8 @@ impl Default for VolumeOptions {
 pub const MAX_ROUNDS: usize = 5;
 
 /// Cells along the curve where the surface crosses itself are this many times finer
-/// than `h`.
+/// than `h` (where [`VolumeOptions::unchecked_min_cell`] allows: such a side has no
+/// predicted topology, and the default bound is h/4).
 const CROSSING_REFINEMENT: f64 = 8.0;
 
 /// The largest lattice spacing accepted, as a fraction of the bounding-box diagonal.
@@ -419,6 +430,12 @@ pub fn survey_surface(
         return Err(Error::invalid_argument(format!(
             "sphere_scale = {} must exceed 1 (the sphere must enclose the surface)",
             options.sphere_scale
+        )));
+    }
+    if !(0.0..=1.0).contains(&options.unchecked_min_cell) {
+        return Err(Error::invalid_argument(format!(
+            "unchecked_min_cell = {} must lie in [0, 1] (a fraction of h; 0 turns it off)",
+            options.unchecked_min_cell
         )));
     }
     let crossings = match distance.crossings() {
@@ -840,8 +857,21 @@ fn stuff_surface(
         (None, Some(_)) => 0,
         (None, None) => 2,
     };
+    // Where no check can confirm the topology, no cell finer than this is asked for.
+    let finest = match expected {
+        None => options.unchecked_min_cell * h,
+        Some(_) => 0.0,
+    };
+    let clamp = |f: &SizingFeature| SizingFeature {
+        spacing: f.spacing.max(finest),
+        ..*f
+    };
+    let first: Vec<SizingFeature> = surveyed.sizing[which].iter().map(clamp).collect();
     if sphere.is_none() {
-        refuse_if_all_below_floor(&surveyed.sizing[which], surveyed.thickness(), &stuffing)?;
+        refuse_if_all_below_floor(&first, surveyed.thickness(), &stuffing)?;
+    }
+    if let Some(warning) = unchecked_floor_warning(&surveyed.sizing[which], finest, h, sphere) {
+        warnings.push(warning);
     }
     let bounds = surface.bounding_box().unwrap_or_default();
     // One meshing with the vertices' sizing or the sampled one, and `extra`
@@ -850,12 +880,12 @@ fn stuff_surface(
         let sizing = if sampled {
             &surveyed.sampled(surface, distance, which).sizing
         } else {
-            &surveyed.sizing[which]
+            &first
         };
         let inside = SurfaceInside {
             distance,
             bounds,
-            sizing: sizing.iter().chain(extra).copied().collect(),
+            sizing: sizing.iter().chain(extra).map(clamp).collect(),
             features: surveyed.features.clone(),
         };
         match sphere {
@@ -884,6 +914,34 @@ fn stuff_surface(
         0
     };
     Ok((meshed, samples))
+}
+
+/// The warning that [`VolumeOptions::unchecked_min_cell`] bound on a side (`sphere`:
+/// the shell's), or `None` when no feature of `sizing` asked for cells finer than
+/// `finest`.
+fn unchecked_floor_warning(
+    sizing: &[SizingFeature],
+    finest: f64,
+    h: f64,
+    sphere: Option<([f64; 3], f64)>,
+) -> Option<String> {
+    let below: Vec<f64> = sizing
+        .iter()
+        .map(|f| f.spacing)
+        .filter(|&s| s < finest)
+        .collect();
+    let asked = below.iter().copied().reduce(f64::min)?;
+    let side = if sphere.is_some() {
+        "outside"
+    } else {
+        "inside"
+    };
+    Some(format!(
+        "{side}: the topology is not predicted, so no cell was made finer than {finest:.3e} ({:.3} h, unchecked_min_cell): {} of {} sizing features asked for finer, down to {asked:.3e}; a part or gap thinner than that may be missed",
+        finest / h,
+        below.len(),
+        sizing.len()
+    ))
 }
 
 /// Mesh, compare with the prediction, and while the topology differs: mesh again sized

@@ -549,3 +549,51 @@ fn where_the_surface_crosses_itself_a_rank_off_its_components_genus_is_said_to_b
         r.warnings
     );
 }
+
+#[test]
+fn a_side_whose_topology_is_not_predicted_gets_no_cells_below_its_bound_and_says_so() {
+    // Two unit spheres 1 apart cross along a circle, which asks for cells of h/8; no
+    // topology check confirms what the inside needs, so the cells stop at h/4.
+    let both = union(&[
+        sphere(1.0, [-0.5, 0.0, 0.0], 24.0),
+        sphere(1.0, [0.5, 0.0, 0.0], 24.0),
+    ]);
+    let exact = 2.0 * 4.0 / 3.0 * PI - PI * 5.0 / 12.0;
+    let mesh = |unchecked_min_cell: f64| {
+        let options = VolumeOptions {
+            unchecked_min_cell,
+            ..VolumeOptions::default()
+        };
+        volume_mesh(&both, Side::Inside, &options).unwrap()
+    };
+    let (bound, free) = (mesh(0.25), mesh(0.0));
+    assert_eq!(bound.topology.expected, None);
+    let said: Vec<&String> = bound
+        .warnings
+        .iter()
+        .filter(|w| w.contains("unchecked_min_cell"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", bound.warnings);
+    assert!(
+        !free
+            .warnings
+            .iter()
+            .any(|w| w.contains("unchecked_min_cell")),
+        "{:?}",
+        free.warnings
+    );
+    let h = bound.h;
+    let finest = [&bound, &free].map(|v| v.stats.as_ref().unwrap().finest_cell);
+    assert!(
+        finest[0] >= 0.25 * h * (1.0 - 1e-9) && finest[1] < 0.25 * h,
+        "{finest:?} (h {h})"
+    );
+    assert!(bound.mesh.num_tets() < free.mesh.num_tets());
+    // The same solid either way: its volume, one component, no hole.
+    for v in [&bound, &free] {
+        let volume = v.mesh.volume();
+        assert!((volume - exact).abs() / exact < 0.02, "{volume} vs {exact}");
+        assert_eq!(components(&v.mesh), 1);
+        assert_eq!(v.mesh.euler_characteristic(), 1);
+    }
+}
