@@ -866,9 +866,9 @@ fn stuff_surface(
         spacing: f.spacing.max(finest),
         ..*f
     };
-    let first: Vec<SizingFeature> = surveyed.sizing[which].iter().map(clamp).collect();
     if sphere.is_none() {
-        refuse_if_all_below_floor(&first, surveyed.thickness(), &stuffing)?;
+        let bounded: Vec<SizingFeature> = surveyed.sizing[which].iter().map(clamp).collect();
+        refuse_if_all_below_floor(&bounded, surveyed.thickness(), &stuffing)?;
     }
     if let Some(warning) = unchecked_floor_warning(&surveyed.sizing[which], finest, h, sphere) {
         warnings.push(warning);
@@ -880,7 +880,7 @@ fn stuff_surface(
         let sizing = if sampled {
             &surveyed.sampled(surface, distance, which).sizing
         } else {
-            &first
+            &surveyed.sizing[which]
         };
         let inside = SurfaceInside {
             distance,
