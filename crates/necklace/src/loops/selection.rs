@@ -324,9 +324,12 @@ pub fn best_fit_normal(points: &[[f64; 3]], center: [f64; 3]) -> [f64; 3] {
 /// Loops for the homology classes the selected saddles' loops miss: `extra` (found from
 /// the Morse stage's completions, seeds numbered from `offset` on in the run) is added
 /// to `found`, each loop only where its class is independent of every loop there and
-/// of those added before it, shortest first, after the loops of `found`. Every other
-/// loop of `extra` is dropped as the same cycle; its seeds and references are
-/// renumbered into the run's.
+/// of those added before it, shortest first, after the loops of `found`. A loop of
+/// `extra` whose class is exactly that of a longer cycle-closing loop of `found` that
+/// is not a neck by its bulge takes that loop's place (one loop per class, shortest
+/// first, as among the selected saddles' own loops): the class stays spanned, by the
+/// shorter loop. Every other loop of `extra`, and every loop replaced, is dropped as
+/// the same cycle; seeds and references are renumbered into the run's.
 pub fn complete_classes(found: &mut LoopResult, extra: LoopResult, offset: usize) {
     let mut basis = Z2Basis::default();
     for l in &found.loops {
@@ -359,6 +362,45 @@ pub fn complete_classes(found: &mut LoopResult, extra: LoopResult, offset: usize
             continue;
         }
         let of = found.loops.iter().position(|kept| kept.class() == class);
+        if let Some(j) = of.filter(|&j| !l.separating && replaceable(&found.loops[j], &l)) {
+            let replaced = std::mem::replace(&mut found.loops[j], l);
+            let kept = &mut found.loops[j];
+            kept.reason = format!(
+                "a shorter loop of the class of seed {}'s loop ({:.5} long), which it replaces: its vertex closes that class, and its plane's curve bounds a disk; {}",
+                replaced.seed, replaced.length, kept.reason
+            );
+            placed[k] = Some(j);
+            let (seed, length) = (kept.seed, replaced.length);
+            // The replaced loop's duplicates, and loops dropped as its class, now
+            // name the loop kept in its place.
+            for d in &mut found.dropped {
+                d.reason = match d.reason {
+                    DropReason::Duplicate { of, length } if of == j => DropReason::SameCycle {
+                        of: Some(seed),
+                        length,
+                    },
+                    DropReason::SameCycle {
+                        of: Some(of),
+                        length,
+                    } if of == replaced.seed => DropReason::SameCycle {
+                        of: Some(seed),
+                        length,
+                    },
+                    reason => reason,
+                };
+            }
+            found.dropped.push(DroppedLoop {
+                kind: replaced.kind,
+                seed: replaced.seed,
+                saddle: replaced.saddle,
+                persistence: replaced.persistence,
+                reason: DropReason::SameCycle {
+                    of: Some(seed),
+                    length,
+                },
+            });
+            continue;
+        }
         let reason = if l.separating {
             DropReason::NotEssential { length: l.length }
         } else {
@@ -395,4 +437,11 @@ pub fn complete_classes(found: &mut LoopResult, extra: LoopResult, offset: usize
     found.timings.preparation += extra.timings.preparation;
     found.timings.cut_and_tighten += extra.timings.cut_and_tighten;
     found.timings.selection += extra.timings.selection;
+}
+
+/// Whether `shorter`, a completion's loop of exactly `kept`'s class, takes its place:
+/// `kept` closes a cycle, is not a neck by its bulge (those are kept for their lobe),
+/// and is longer.
+fn replaceable(kept: &NeckLoop, shorter: &NeckLoop) -> bool {
+    kept.role == Some(Role::CycleClosing) && kept.bulge.is_none() && shorter.length < kept.length
 }

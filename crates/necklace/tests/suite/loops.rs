@@ -8,8 +8,9 @@ use necklace::loops::cut::{
 };
 use necklace::loops::tighten::{tighten, tighten_resumable, SurfaceGeometry, TightenStatus};
 use necklace::loops::{
-    find_loops, find_loops_with_progress, DropReason, Initial, LoopMemo, LoopOptions,
-    MembraneFailure, MembraneUse, NeckLoop, Role, Seed, SurfacePoint, TightenOptions, Tightened,
+    complete_classes, find_loops, find_loops_with_progress, DropReason, Initial, LoopMemo,
+    LoopOptions, MembraneFailure, MembraneUse, NeckLoop, Role, Seed, SurfacePoint, TightenOptions,
+    Tightened,
 };
 use necklace::mesh::{HomologyBasis, Topology};
 use necklace::morse::NormalSource;
@@ -59,6 +60,20 @@ fn wavy_revolution(
     SurfaceMesh::new(positions, triangles).unwrap()
 }
 
+/// The triangles of a closed ring of `along` × `around` vertices, vertex `i · around + j`
+/// the `j`-th round the tube of the `i`-th along it.
+fn ring_triangles(along: usize, around: usize) -> Vec<[u32; 3]> {
+    let id = |i: usize, j: usize| ((i % along) * around + j % around) as u32;
+    let mut triangles = Vec::new();
+    for i in 0..along {
+        for j in 0..around {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    triangles
+}
+
 /// A ring whose core curve (cos t, sin t, `a` cos 2t) rises and falls like a saddle,
 /// with a round tube of radius `rho`: a window whose rim is not flat. The planes z = h
 /// that cut the tube all the way round, in a curve around the hole, are those with
@@ -88,15 +103,7 @@ fn saddle_ring(a: f64, rho: f64, along: usize, around: usize) -> SurfaceMesh {
             positions.push([0, 1, 2].map(|k| core[k] + c * n[k] + s * b[k]));
         }
     }
-    let id = |i: usize, j: usize| ((i % along) * around + j % around) as u32;
-    let mut triangles = Vec::new();
-    for i in 0..along {
-        for j in 0..around {
-            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    SurfaceMesh::new(positions, triangles).unwrap()
+    SurfaceMesh::new(positions, ring_triangles(along, around)).unwrap()
 }
 
 /// Profile with its narrowest circle, radius 0.2, at z = 0; capped towards the poles.
@@ -910,6 +917,92 @@ fn a_plane_that_misses_the_saddle_gives_a_reasoned_drop_and_bad_seeds_an_error()
         ..LoopOptions::default()
     };
     assert!(find_loops(&mesh, &outside, Side::Inside, &bad).is_err());
+}
+
+/// A ring about the z axis (core circle of radius 1) whose round tube has radius
+/// `tube(t)` at angle `t` of the core; `along` × `around` vertices.
+fn ring_with_tube(tube: impl Fn(f64) -> f64, along: usize, around: usize) -> SurfaceMesh {
+    let mut positions = Vec::with_capacity(along * around);
+    for i in 0..along {
+        let t = 2.0 * PI * i as f64 / along as f64;
+        let rho = tube(t);
+        for j in 0..around {
+            let phi = 2.0 * PI * j as f64 / around as f64;
+            let out = 1.0 + rho * phi.cos();
+            positions.push([out * t.cos(), out * t.sin(), rho * phi.sin()]);
+        }
+    }
+    SurfaceMesh::new(positions, ring_triangles(along, around)).unwrap()
+}
+
+#[test]
+fn a_completion_loop_of_a_longer_selected_loops_class_takes_its_place() {
+    // A ring with two waists, each a closed geodesic by the ring's mirror symmetry
+    // through it: tube radius 0.1875 at t = π/2, 0.1375 at t = 3π/2. Their meridians
+    // are of one class; a selected saddle's loop at the wider waist, a completion's at
+    // the narrower.
+    let tube = |t: f64| 0.25 * (1.0 + 0.35 * (2.0 * t).cos() + 0.1 * t.sin());
+    let mesh = ring_with_tube(tube, 256, 64);
+    let options = LoopOptions::default();
+    let cut = |t: f64| {
+        let seeds = [Seed {
+            position: [t.cos(), t.sin(), 0.0],
+            normal: [-t.sin(), t.cos(), 0.0],
+            persistence: 5,
+            role: Some(Role::CycleClosing),
+            ..Seed::default()
+        }];
+        find_loops(&mesh, &seeds, Side::Inside, &options).unwrap()
+    };
+    let (wide, narrow) = (cut(PI / 2.0), cut(1.5 * PI));
+    assert_eq!((wide.loops.len(), narrow.loops.len()), (1, 1));
+    let (wide_length, narrow_length) = (wide.loops[0].length, narrow.loops[0].length);
+    for (length, t) in [(wide_length, PI / 2.0), (narrow_length, 1.5 * PI)] {
+        let circle = 2.0 * PI * tube(t);
+        assert!(
+            (length - circle).abs() < 0.01 * circle,
+            "{length} vs {circle}"
+        );
+    }
+    assert_eq!(wide.loops[0].homology, narrow.loops[0].homology);
+
+    // The shorter loop of the class is kept, under its own seed (numbered after the
+    // selected one), and the longer one is dropped as the same cycle.
+    let mut found = wide.clone();
+    complete_classes(&mut found, narrow.clone(), 1);
+    assert_eq!(found.loops.len(), 1);
+    assert_eq!(
+        (found.loops[0].seed, found.loops[0].length),
+        (1, narrow_length)
+    );
+    assert!(
+        found.loops[0].reason.contains("replaces"),
+        "{}",
+        found.loops[0].reason
+    );
+    let dropped: Vec<_> = found.dropped.iter().filter(|d| d.seed == 0).collect();
+    assert_eq!(dropped.len(), 1);
+    assert!(matches!(
+        dropped[0].reason,
+        DropReason::SameCycle { of: Some(1), length } if length == wide_length
+    ));
+
+    // A neck by its bulge keeps its place: the completion is the same cycle.
+    let mut by_shape = wide.clone();
+    by_shape.loops[0].bulge = Some(2.0);
+    complete_classes(&mut by_shape, narrow.clone(), 1);
+    assert_eq!(by_shape.loops.len(), 1);
+    assert_eq!(by_shape.loops[0].length, wide_length);
+    assert!(by_shape
+        .dropped
+        .iter()
+        .any(|d| d.seed == 1 && matches!(d.reason, DropReason::SameCycle { of: Some(0), .. })));
+
+    // The other way round (the selected loop the shorter), nothing moves.
+    let mut shorter_first = narrow;
+    complete_classes(&mut shorter_first, wide, 1);
+    assert_eq!(shorter_first.loops.len(), 1);
+    assert_eq!(shorter_first.loops[0].length, narrow_length);
 }
 
 /// A seed on the z axis at height `z`, cutting with horizontal planes.
