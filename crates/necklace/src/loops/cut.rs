@@ -17,6 +17,7 @@
 pub use crate::geom::plane_basis;
 use crate::geom::{dot, lerp, norm, sub};
 use crate::mesh::{Side, SurfaceMesh, Topology};
+use rustc_hash::FxHashSet;
 
 /// A plane through `origin` with unit `normal`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -142,8 +143,9 @@ impl Cutter<'_> {
 
     /// Whether another closed curve of the plane lies inside `curve`, a closed curve of
     /// it: [`encloses_another`] over the curves of [`Cutter::cut`]. A curve counts as
-    /// inside by its first point, which lies in `curve`'s bounding rectangle in the
-    /// plane if inside it: only the curves through edges near that rectangle are walked.
+    /// inside by its first point (its crossing of lowest edge index), which lies in
+    /// `curve`'s bounding rectangle in the plane if inside it: only the curves through
+    /// edges near that rectangle are walked, one at a time, until one lies inside.
     pub fn encloses_another_round(&self, plane: &Plane, curve: &CutCurve) -> bool {
         let (mesh, topology) = (self.mesh, self.topology);
         let (u, v) = plane_basis(plane.normal);
@@ -156,25 +158,50 @@ impl Cutter<'_> {
                 hi[k] = hi[k].max(p[k]);
             }
         }
-        let mut near = Vec::new();
+        // Outside the rectangle a point is outside the polygon (the crossing-number test
+        // counts an even number of crossings there): only points within it are tested.
+        let inside = |p: [f64; 3]| {
+            let q = project(p);
+            (0..2).all(|k| q[k] >= lo[k] && q[k] <= hi[k]) && area_and_contains(&poly, q).1
+        };
         if self.tree.two_faces_per_edge {
+            let mut near = Vec::new();
             self.tree
                 .near(plane, &[(u, lo[0], hi[0]), (v, lo[1], hi[1])], &mut near);
             near.retain(|&e| crosses(mesh, topology, plane, e as usize));
             near.sort_unstable();
+            let own = curve.crossings.first().map(|c| c.edge);
+            let is_crossed = |g: usize| crosses(mesh, topology, plane, g);
+            let mut walked = FxHashSet::default();
+            let mut walks_closed = true;
+            let found = near.iter().any(|&seed| {
+                let seed = seed as usize;
+                if walked.contains(&seed) || !walks_closed {
+                    return false;
+                }
+                let Some((edges, _)) = cycle(seed, topology, &is_crossed) else {
+                    walks_closed = false;
+                    return false;
+                };
+                walked.extend(edges.iter().copied());
+                let lowest = edges.iter().copied().min().unwrap_or(seed);
+                Some(lowest as u32) != own
+                    && inside(crossing_point(
+                        mesh,
+                        topology,
+                        crossing(mesh, topology, plane, lowest),
+                    ))
+            });
+            if found || walks_closed {
+                return found;
+            }
         }
-        let curves = self
-            .tree
-            .two_faces_per_edge
-            .then(|| self.curves_through(plane, &near))
-            .flatten()
-            .unwrap_or_else(|| self.cut(plane));
-        curves.iter().any(|c| {
+        self.cut(plane).iter().any(|c| {
             c.closed
                 && c.crossings.first() != curve.crossings.first()
-                && c.points(mesh, topology)
+                && c.crossings
                     .first()
-                    .is_some_and(|&p| area_and_contains(&poly, project(p)).1)
+                    .is_some_and(|&x| inside(crossing_point(mesh, topology, x)))
         })
     }
 
@@ -186,7 +213,7 @@ impl Cutter<'_> {
         let is_crossed = |g: usize| crosses(mesh, topology, plane, g);
         // Each curve through a seed, walked once, then from its edge of lowest index.
         let mut walked: Vec<(Vec<usize>, Vec<u32>)> = Vec::new();
-        let mut seen = std::collections::HashSet::new();
+        let mut seen = FxHashSet::default();
         for &seed in seeds {
             let seed = seed as usize;
             if seen.contains(&seed) {

@@ -930,12 +930,14 @@ fn around_point(
         }
         if let Some(i) = loop_around(surface, topology, &plane, &curves, point) {
             if let Some(side) = disk {
-                let islands = if only_round {
-                    cutter.encloses_another_round(&plane, &curves[i])
-                } else {
-                    encloses_another(surface, topology, &plane, &curves, i)
-                };
-                if islands || cut::region_side(surface, topology, &plane, &curves[i]) != side {
+                // The side first: it reads the curve alone, the islands the plane round it.
+                let not_disk = cut::region_side(surface, topology, &plane, &curves[i]) != side
+                    || if only_round {
+                        cutter.encloses_another_round(&plane, &curves[i])
+                    } else {
+                        encloses_another(surface, topology, &plane, &curves, i)
+                    };
+                if not_disk {
                     not_disks += 1;
                     continue;
                 }
