@@ -332,8 +332,10 @@ pub fn best_fit_normal(points: &[[f64; 3]], center: [f64; 3]) -> [f64; 3] {
 /// the same cycle; seeds and references are renumbered into the run's.
 pub fn complete_classes(found: &mut LoopResult, extra: LoopResult, offset: usize) {
     let mut basis = Z2Basis::default();
-    for l in &found.loops {
-        basis.insert(&l.class());
+    // The classes of `found`'s loops, kept in step with them (each is parsed once).
+    let mut classes: Vec<Vec<u64>> = found.loops.iter().map(NeckLoop::class).collect();
+    for class in &classes {
+        basis.insert(class);
     }
     let mut order: Vec<usize> = (0..extra.loops.len()).collect();
     order.sort_by(|&a, &b| {
@@ -359,9 +361,10 @@ pub fn complete_classes(found: &mut LoopResult, extra: LoopResult, offset: usize
             );
             placed[k] = Some(found.loops.len());
             found.loops.push(l);
+            classes.push(class);
             continue;
         }
-        let of = found.loops.iter().position(|kept| kept.class() == class);
+        let of = classes.iter().position(|kept| *kept == class);
         if let Some(j) = of.filter(|&j| !l.separating && replaceable(&found.loops[j], &l)) {
             let replaced = std::mem::replace(&mut found.loops[j], l);
             let kept = &mut found.loops[j];
