@@ -35,7 +35,7 @@ const CRATES: &[(&str, Option<&[&str]>)] = &[
     ("flate2", Some(&["io::vtk"])),
     ("serde_json", Some(&["output", "batch"])),
     ("sha2", Some(&["batch"])),
-    ("rustc_hash", Some(&["volume"])),
+    ("rustc_hash", Some(&["volume", "loops::cut"])),
     ("indicatif", Some(&[])),
 ];
 
